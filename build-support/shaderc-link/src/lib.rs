@@ -1,0 +1,2 @@
+//! Build-time only: `shaderc`, linked against Debian's static archives (see build.rs).
+pub use shaderc;

@@ -1,0 +1,49 @@
+#version 450
+// Lacquer surface: Σ over lights of f_r · E · (N·L), SPEC §2 and §4.
+
+#include "frame.glsl"
+#define FRESNEL_SET 0
+#define FRESNEL_BINDING 1
+#include "lacquer_brdf.glsl"
+
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+
+layout(location = 0) out vec4 out_radiance;
+
+void main() {
+    LacquerParams p;
+    p.beckmann_m = frame.material.x;
+    p.diffuse_a = frame.material.y;
+    p.diffuse_b = frame.material.z;
+    p.lacquer_g = frame.material.w;
+    p.albedo = frame.albedo_count.xyz;
+    p.fresnel_count = int(frame.albedo_count.w);
+
+    vec3 n = normalize(in_normal);
+    vec3 v = normalize(frame.eye.xyz - in_position);
+    vec3 radiance = vec3(0.0);
+    for (int i = 0; i < frame.light_count.x; ++i) {
+        vec4 lv = frame.light_vector[i];
+        vec3 l;
+        vec3 irradiance;
+        if (lv.w == 0.0) {
+            l = normalize(lv.xyz);
+            irradiance = frame.light_color[i].rgb;
+        } else {
+            vec3 to_light = lv.xyz - in_position;
+            float d2 = dot(to_light, to_light);
+            if (d2 <= 0.0) {
+                continue;
+            }
+            l = to_light * inversesqrt(d2);
+            irradiance = frame.light_color[i].rgb / d2;
+        }
+        float nl = dot(n, l);
+        if (nl <= 0.0) {
+            continue;
+        }
+        radiance += lacquer_brdf(p, n, v, l) * irradiance * nl;
+    }
+    out_radiance = vec4(radiance, 1.0);
+}

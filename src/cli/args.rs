@@ -1,0 +1,160 @@
+//! The argument surface (clap derive) and the small value parsers it needs.
+
+use crate::output::ToneCurve;
+use crate::{Error, Result};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use glam::DVec3;
+use std::path::PathBuf;
+
+#[derive(Debug, Parser)]
+#[command(name = "shikki", version, about = "Render Japanese lacquer ware (urushi) headless on Vulkan")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Render a mesh with the lacquer BRDF to PNG or EXR (the default command).
+    Render(RenderArgs),
+    /// Evaluate f_r for direction triples read from a CSV (columns nx,ny,nz,vx,vy,vz,lx,ly,lz).
+    Brdf(BrdfArgs),
+    /// Print the Fresnel table of a material as angle_deg,r,g,b for 0..90 degrees.
+    Fresnel(MaterialArgs),
+    /// Print the Vulkan device, driver and the limits shikki relies on.
+    Info,
+}
+
+/// A preset and `--set` overrides: the material of SPEC §2–3.
+#[derive(Debug, Clone, Args)]
+pub struct MaterialArgs {
+    /// Material preset: smooth, rough, smooth-black, smooth-red, rough-black, rough-red.
+    #[arg(long, default_value = "smooth-red")]
+    pub preset: String,
+    /// Override a material field by its SPEC name: m, a, b, c0, c1, c2, r, kd=r,g,b,
+    /// fresnel=PATH.csv, ior_a, ior_b, extrapolate_g=true, beta_normal, beta_grazing, beta_power.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Backend {
+    Cpu,
+    Gpu,
+}
+
+#[derive(Debug, Args)]
+pub struct BrdfArgs {
+    #[command(flatten)]
+    pub material: MaterialArgs,
+    /// CSV with header nx,ny,nz,vx,vy,vz,lx,ly,lz.
+    #[arg(long)]
+    pub input: PathBuf,
+    /// Evaluate with the CPU model or with the GLSL BRDF in a compute shader.
+    #[arg(long, value_enum, default_value = "cpu")]
+    pub backend: Backend,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Output file: .png (tone-mapped sRGB) or .exr (linear radiance).
+    #[arg(short = 'o', long = "output", default_value = "shikki.png")]
+    pub output: PathBuf,
+    /// Image size WxH in pixels.
+    #[arg(long, default_value = "1024x1024", value_parser = parse_size)]
+    pub size: (u32, u32),
+    #[command(flatten)]
+    pub material: MaterialArgs,
+    /// builtin:sphere or builtin:board.
+    #[arg(long, default_value = "builtin:sphere")]
+    pub mesh: String,
+    /// Camera position x,y,z.
+    #[arg(long, value_parser = parse_vec3_arg, allow_hyphen_values = true)]
+    pub eye: Option<DVec3>,
+    /// Point the camera looks at, x,y,z.
+    #[arg(long, value_parser = parse_vec3_arg, allow_hyphen_values = true)]
+    pub target: Option<DVec3>,
+    /// Vertical field of view in degrees.
+    #[arg(long)]
+    pub fov: Option<f64>,
+    /// dir:x,y,z:r,g,b (towards the light; irradiance) or point:x,y,z:r,g,b (position;
+    /// intensity). Repeatable; without any, a default key, fill and rim light.
+    #[arg(long = "light", allow_hyphen_values = true)]
+    pub lights: Vec<String>,
+    /// MSAA samples per pixel: 1 or 4.
+    #[arg(long, default_value_t = 4)]
+    pub samples: u32,
+    /// Exposure in EV for PNG output (radiance × 2^EV).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub exposure: f32,
+    /// Tone curve for PNG output.
+    #[arg(long, default_value = "aces", value_parser = parse_tone_curve)]
+    pub tonemap: ToneCurve,
+}
+
+impl Default for RenderArgs {
+    fn default() -> Self {
+        // The same defaults clap applies, for `shikki` with no arguments.
+        match Cli::try_parse_from(["shikki", "render"]) {
+            Ok(Cli {
+                command: Some(Command::Render(args)),
+            }) => args,
+            // Unreachable with the static argument list above; keep a usable value anyway.
+            _ => RenderArgs {
+                output: PathBuf::from("shikki.png"),
+                size: (1024, 1024),
+                material: MaterialArgs {
+                    preset: "smooth-red".into(),
+                    set: Vec::new(),
+                },
+                mesh: "builtin:sphere".into(),
+                eye: None,
+                target: None,
+                fov: None,
+                lights: Vec::new(),
+                samples: 4,
+                exposure: 0.0,
+                tonemap: ToneCurve::Aces,
+            },
+        }
+    }
+}
+
+fn parse_tone_curve(s: &str) -> std::result::Result<ToneCurve, String> {
+    s.parse::<ToneCurve>().map_err(|e| e.to_string())
+}
+
+fn parse_vec3_arg(s: &str) -> std::result::Result<DVec3, String> {
+    parse_vec3("vector", s).map_err(|e| e.to_string())
+}
+
+/// `WxH` with both in 1..=65535.
+pub fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+    let err = || format!("size {s:?}: expected WxH with positive integers, e.g. 1024x768");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(err)?;
+    let w: u32 = w.trim().parse().map_err(|_| err())?;
+    let h: u32 = h.trim().parse().map_err(|_| err())?;
+    if w == 0 || h == 0 || w > 65535 || h > 65535 {
+        return Err(err());
+    }
+    Ok((w, h))
+}
+
+/// `x,y,z` of finite numbers.
+pub fn parse_vec3(field: &str, s: &str) -> Result<DVec3> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 {
+        return Err(Error::invalid(field, s, "expected three numbers x,y,z"));
+    }
+    let mut v = [0.0; 3];
+    for (slot, part) in v.iter_mut().zip(&parts) {
+        let x: f64 = part
+            .parse()
+            .map_err(|_| Error::invalid(field, s, format!("{part:?} is not a number")))?;
+        if !x.is_finite() {
+            return Err(Error::invalid(field, s, "components must be finite"));
+        }
+        *slot = x;
+    }
+    Ok(DVec3::from_array(v))
+}

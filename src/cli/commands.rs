@@ -1,0 +1,216 @@
+//! What each subcommand does, in terms of the library.
+
+use super::args::{Backend, BrdfArgs, Cli, Command, MaterialArgs, RenderArgs};
+use super::directions;
+use crate::compute::BrdfEvaluator;
+use crate::gpu::{ContextOptions, GpuContext};
+use crate::model::{lacquer_brdf, LacquerMaterial};
+use crate::output::{self, PngSettings};
+use crate::raster::camera::Camera;
+use crate::raster::draw::{DrawScene, LacquerRenderer, RenderSettings};
+use crate::raster::lights::{default_lights, Light, MAX_LIGHTS};
+use crate::raster::mesh::BuiltinMesh;
+use crate::{Error, Result};
+use glam::DVec3;
+use std::io::Write;
+
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        None => render(RenderArgs::default()),
+        Some(Command::Render(args)) => render(args),
+        Some(Command::Brdf(args)) => brdf(args),
+        Some(Command::Fresnel(args)) => fresnel(args),
+        Some(Command::Info) => info(),
+    }
+}
+
+/// The preset, then every `--set KEY=VALUE` in order, then full validation.
+pub fn build_material(args: &MaterialArgs) -> Result<LacquerMaterial> {
+    let mut material = LacquerMaterial::preset(&args.preset)?;
+    for assignment in &args.set {
+        let (key, value) = assignment.split_once('=').ok_or_else(|| {
+            Error::invalid(
+                "--set",
+                assignment,
+                "expected KEY=VALUE, e.g. --set m=0.1 or --set kd=0.5,0.06,0.03",
+            )
+        })?;
+        material.set(key.trim(), value.trim())?;
+    }
+    material.validate()?;
+    Ok(material)
+}
+
+/// A camera that frames the chosen built-in mesh, with the user's overrides applied.
+fn camera_for(mesh: BuiltinMesh, args: &RenderArgs) -> Result<Camera> {
+    let mut camera = Camera::default();
+    if mesh == BuiltinMesh::Board {
+        // The board lies in the XZ plane: look down at it at 45° rather than edge-on.
+        camera.eye = DVec3::new(0.0, 3.0, 3.0);
+    }
+    if let Some(eye) = args.eye {
+        camera.eye = eye;
+    }
+    if let Some(target) = args.target {
+        camera.target = target;
+    }
+    if let Some(fov) = args.fov {
+        camera.fov_deg = fov;
+    }
+    camera.validate()?;
+    Ok(camera)
+}
+
+fn lights_from(specs: &[String]) -> Result<Vec<Light>> {
+    if specs.is_empty() {
+        return Ok(default_lights());
+    }
+    if specs.len() > MAX_LIGHTS {
+        return Err(Error::invalid(
+            "--light",
+            format!("{} lights", specs.len()),
+            format!("at most {MAX_LIGHTS} lights"),
+        ));
+    }
+    specs.iter().map(|s| Light::parse(s)).collect()
+}
+
+fn render(args: RenderArgs) -> Result<()> {
+    let material = build_material(&args.material)?;
+    let brdf = material.brdf_params()?;
+    let fresnel = material.fresnel_table()?;
+    let builtin = BuiltinMesh::parse(&args.mesh)?;
+    let mesh = builtin.mesh();
+    let camera = camera_for(builtin, &args)?;
+    let lights = lights_from(&args.lights)?;
+    if !args.exposure.is_finite() {
+        return Err(Error::invalid(
+            "--exposure",
+            args.exposure,
+            "must be a finite number of EV",
+        ));
+    }
+    let png = PngSettings {
+        exposure_ev: args.exposure,
+        tone_curve: args.tonemap,
+    };
+    // Fail before rendering if the output cannot be written.
+    output::preflight_output(&args.output)?;
+
+    let gpu = GpuContext::new(&ContextOptions::from_env())?;
+    let mut renderer = LacquerRenderer::new();
+    let image = renderer.render(
+        &gpu,
+        &DrawScene {
+            mesh: &mesh,
+            camera: &camera,
+            lights: &lights,
+            brdf: &brdf,
+            fresnel: &fresnel,
+        },
+        &RenderSettings {
+            width: args.size.0,
+            height: args.size.1,
+            samples: args.samples,
+        },
+    )?;
+    gpu.check_validation()?;
+    output::write_image(&args.output, &image, &png)?;
+    eprintln!(
+        "wrote {} ({}x{}, {} sample(s), {} on {})",
+        args.output.display(),
+        args.size.0,
+        args.size.1,
+        args.samples,
+        args.material.preset,
+        gpu.info().name
+    );
+    Ok(())
+}
+
+fn brdf(args: BrdfArgs) -> Result<()> {
+    let material = build_material(&args.material)?;
+    let params = material.brdf_params()?;
+    let fresnel = material.fresnel_table()?;
+    let text = std::fs::read_to_string(&args.input).map_err(|source| Error::Read {
+        path: args.input.clone(),
+        source,
+    })?;
+    let rows = directions::parse_directions(&text, &args.input.display().to_string())?;
+    let values: Vec<[f64; 3]> = match args.backend {
+        Backend::Cpu => rows
+            .iter()
+            .map(|[n, v, l]| lacquer_brdf(&params, &fresnel, *n, *v, *l))
+            .collect(),
+        Backend::Gpu => {
+            let gpu = GpuContext::new(&ContextOptions::from_env())?;
+            let evaluator = BrdfEvaluator::new(&gpu)?;
+            let values = evaluator.evaluate(&gpu, &params, &fresnel, &rows)?;
+            gpu.check_validation()?;
+            values
+                .iter()
+                .map(|v| v.map(f64::from))
+                .collect()
+        }
+    };
+    let mut out = String::with_capacity(rows.len() * 200);
+    out.push_str(directions::HEADER);
+    out.push_str(",r,g,b\n");
+    for (triple, rgb) in rows.iter().zip(values) {
+        out.push_str(&directions::format_row(triple, rgb));
+        out.push('\n');
+    }
+    write_stdout(&out)
+}
+
+fn fresnel(args: MaterialArgs) -> Result<()> {
+    let material = build_material(&args)?;
+    write_stdout(&material.fresnel_table()?.to_csv())
+}
+
+fn info() -> Result<()> {
+    let gpu = GpuContext::new(&ContextOptions::from_env())?;
+    let i = gpu.info();
+    let text = format!(
+        "device:               {}\n\
+         type:                 {}\n\
+         driver:               {} ({})\n\
+         Vulkan:               {}\n\
+         validation:           {}\n\
+         max image 2D:         {}\n\
+         max image cube:       {}\n\
+         max compute threads:  {}\n\
+         max storage buffer:   {} bytes\n\
+         max uniform buffer:   {} bytes\n\
+         MSAA sample counts:   {:?}\n\
+         timestamps:           {} (period {} ns)\n",
+        i.name,
+        i.device_type,
+        i.driver_name,
+        i.driver_info,
+        i.api_version,
+        if gpu.validation_enabled() { "on" } else { "off (SHIKKI_VALIDATION=1 to enable)" },
+        i.max_image_dimension_2d,
+        i.max_image_dimension_cube,
+        i.max_compute_workgroup_invocations,
+        i.max_storage_buffer_range,
+        i.max_uniform_buffer_range,
+        i.framebuffer_color_sample_counts,
+        if i.timestamp_compute_and_graphics { "yes" } else { "no" },
+        i.timestamp_period_ns,
+    );
+    write_stdout(&text)
+}
+
+/// Writes to stdout; a closed pipe (`shikki brdf … | head`) is not an error worth a panic.
+fn write_stdout(text: &str) -> Result<()> {
+    let mut stdout = std::io::stdout().lock();
+    match stdout.write_all(text.as_bytes()).and_then(|()| stdout.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        Err(e) => Err(Error::Write {
+            path: "stdout".into(),
+            message: e.to_string(),
+        }),
+    }
+}

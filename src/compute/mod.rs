@@ -1,0 +1,6 @@
+//! GPU compute passes that are not part of drawing: the BRDF evaluator (`brdf_eval`), used by
+//! `shikki brdf --backend gpu` and by the tests that hold the GLSL BRDF against the CPU model.
+
+pub mod brdf_eval;
+
+pub use brdf_eval::BrdfEvaluator;

@@ -1,0 +1,153 @@
+//! Choosing the physical device: discrete > integrated > virtual > CPU, or the first whose name
+//! contains `SHIKKI_DEVICE`. Only devices with Vulkan 1.3, dynamic rendering, synchronization2 and
+//! a graphics+compute queue qualify.
+
+use super::error::{GpuError, VkResultExt};
+use ash::vk;
+
+/// What `shikki info` prints and what the renderer checks sizes against.
+#[derive(Clone, Debug)]
+pub struct AdapterInfo {
+    pub name: String,
+    pub device_type: String,
+    pub driver_name: String,
+    pub driver_info: String,
+    pub api_version: String,
+    pub max_image_dimension_2d: u32,
+    pub max_image_dimension_cube: u32,
+    pub max_compute_workgroup_invocations: u32,
+    pub max_storage_buffer_range: u32,
+    pub max_uniform_buffer_range: u32,
+    pub framebuffer_color_sample_counts: Vec<u32>,
+    pub timestamp_period_ns: f32,
+    pub timestamp_compute_and_graphics: bool,
+}
+
+pub(crate) struct ChosenAdapter {
+    pub physical_device: vk::PhysicalDevice,
+    pub queue_family: u32,
+    pub info: AdapterInfo,
+}
+
+pub(crate) fn choose_adapter(
+    instance: &ash::Instance,
+    wanted: Option<&str>,
+) -> Result<ChosenAdapter, GpuError> {
+    // SAFETY: a plain query on a valid instance.
+    let devices =
+        unsafe { instance.enumerate_physical_devices() }.during("vkEnumeratePhysicalDevices")?;
+    let mut candidates = Vec::new();
+    let mut rejected = Vec::new();
+    for physical_device in devices {
+        let info = describe(instance, physical_device);
+        match suitability(instance, physical_device) {
+            Ok(queue_family) => candidates.push(ChosenAdapter {
+                physical_device,
+                queue_family,
+                info,
+            }),
+            Err(why) => rejected.push(format!("{} ({why})", info.name)),
+        }
+    }
+    if let Some(wanted) = wanted {
+        let needle = wanted.to_lowercase();
+        let available: Vec<String> = candidates.iter().map(|c| c.info.name.clone()).collect();
+        return candidates
+            .into_iter()
+            .find(|c| c.info.name.to_lowercase().contains(&needle))
+            .ok_or_else(|| GpuError::DeviceNotFound {
+                wanted: wanted.to_string(),
+                available: if available.is_empty() {
+                    "none".to_string()
+                } else {
+                    available.join(", ")
+                },
+            });
+    }
+    candidates.sort_by_key(|c| type_rank(&c.info.device_type));
+    candidates.into_iter().next().ok_or_else(|| GpuError::NoDevice {
+        detail: if rejected.is_empty() {
+            String::new()
+        } else {
+            format!(" (unsuitable: {})", rejected.join("; "))
+        },
+    })
+}
+
+fn type_rank(device_type: &str) -> u8 {
+    match device_type {
+        "discrete GPU" => 0,
+        "integrated GPU" => 1,
+        "virtual GPU" => 2,
+        "CPU" => 3,
+        _ => 4,
+    }
+}
+
+/// The queue family to use, or why this device cannot be used.
+fn suitability(instance: &ash::Instance, device: vk::PhysicalDevice) -> Result<u32, String> {
+    // SAFETY: plain queries on a valid physical device.
+    let props = unsafe { instance.get_physical_device_properties(device) };
+    if props.api_version < vk::API_VERSION_1_3 {
+        return Err("Vulkan 1.3 required".into());
+    }
+    let mut features13 = vk::PhysicalDeviceVulkan13Features::default();
+    let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut features13);
+    // SAFETY: as above; `features` chains only structs that live on this stack frame.
+    unsafe { instance.get_physical_device_features2(device, &mut features) };
+    if features13.dynamic_rendering == vk::FALSE || features13.synchronization2 == vk::FALSE {
+        return Err("dynamicRendering and synchronization2 required".into());
+    }
+    // SAFETY: as above.
+    let families = unsafe { instance.get_physical_device_queue_family_properties(device) };
+    let wanted = vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE;
+    families
+        .iter()
+        .position(|f| f.queue_flags.contains(wanted) && f.queue_count > 0)
+        .map(|i| i as u32)
+        .ok_or_else(|| "no graphics+compute queue".to_string())
+}
+
+fn describe(instance: &ash::Instance, device: vk::PhysicalDevice) -> AdapterInfo {
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+    // SAFETY: plain query; the chained struct lives on this stack frame.
+    unsafe { instance.get_physical_device_properties2(device, &mut props2) };
+    let props = props2.properties;
+    let limits = props.limits;
+    let name = props
+        .device_name_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|_| "(unnamed)".into());
+    let driver_name = driver
+        .driver_name_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let driver_info = driver
+        .driver_info_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let v = props.api_version;
+    AdapterInfo {
+        name,
+        device_type: super::conv::device_type_name(props.device_type).to_string(),
+        driver_name,
+        driver_info,
+        api_version: format!(
+            "{}.{}.{}",
+            vk::api_version_major(v),
+            vk::api_version_minor(v),
+            vk::api_version_patch(v)
+        ),
+        max_image_dimension_2d: limits.max_image_dimension2_d,
+        max_image_dimension_cube: limits.max_image_dimension_cube,
+        max_compute_workgroup_invocations: limits.max_compute_work_group_invocations,
+        max_storage_buffer_range: limits.max_storage_buffer_range,
+        max_uniform_buffer_range: limits.max_uniform_buffer_range,
+        framebuffer_color_sample_counts: super::conv::sample_counts(
+            limits.framebuffer_color_sample_counts & limits.framebuffer_depth_sample_counts,
+        ),
+        timestamp_period_ns: limits.timestamp_period,
+        timestamp_compute_and_graphics: limits.timestamp_compute_and_graphics == vk::TRUE,
+    }
+}

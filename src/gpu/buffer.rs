@@ -1,0 +1,187 @@
+//! Buffers and their memory. Host-visible buffers are persistently mapped (gpu-allocator only
+//! hands out HOST_COHERENT memory for them, so no flush/invalidate is needed; the submit and fence
+//! are the host↔device synchronisation).
+
+use super::device::DeviceShared;
+use super::error::{GpuError, VkResultExt};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// What a buffer is used for (combine with `|`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BufferUsage(vk::BufferUsageFlags);
+
+impl BufferUsage {
+    pub const VERTEX: Self = Self(vk::BufferUsageFlags::VERTEX_BUFFER);
+    pub const INDEX: Self = Self(vk::BufferUsageFlags::INDEX_BUFFER);
+    pub const UNIFORM: Self = Self(vk::BufferUsageFlags::UNIFORM_BUFFER);
+    pub const STORAGE: Self = Self(vk::BufferUsageFlags::STORAGE_BUFFER);
+    pub const TRANSFER_SRC: Self = Self(vk::BufferUsageFlags::TRANSFER_SRC);
+    pub const TRANSFER_DST: Self = Self(vk::BufferUsageFlags::TRANSFER_DST);
+}
+
+impl std::ops::BitOr for BufferUsage {
+    type Output = Self;
+    fn bitor(self, rhs: Self) -> Self {
+        Self(self.0 | rhs.0)
+    }
+}
+
+/// Where the memory lives, as intent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MemoryUse {
+    /// Written by the host, read by the device.
+    Upload,
+    /// Written by the device, read back by the host.
+    Readback,
+    /// Device only.
+    DeviceLocal,
+}
+
+#[derive(Clone, Debug)]
+pub struct BufferDesc {
+    pub name: String,
+    pub size: u64,
+    pub usage: BufferUsage,
+    pub memory: MemoryUse,
+}
+
+impl BufferDesc {
+    pub fn upload(name: &str, size: u64, usage: BufferUsage) -> Self {
+        Self {
+            name: name.into(),
+            size,
+            usage,
+            memory: MemoryUse::Upload,
+        }
+    }
+    pub fn readback(name: &str, size: u64) -> Self {
+        Self {
+            name: name.into(),
+            size,
+            usage: BufferUsage::TRANSFER_DST | BufferUsage::STORAGE,
+            memory: MemoryUse::Readback,
+        }
+    }
+    pub fn device_local(name: &str, size: u64, usage: BufferUsage) -> Self {
+        Self {
+            name: name.into(),
+            size,
+            usage,
+            memory: MemoryUse::DeviceLocal,
+        }
+    }
+}
+
+/// A buffer with its memory; freed on drop.
+pub struct Buffer {
+    pub(crate) raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    desc: BufferDesc,
+    shared: Arc<DeviceShared>,
+}
+
+impl Buffer {
+    pub(crate) fn new(shared: &Arc<DeviceShared>, desc: BufferDesc) -> Result<Self, GpuError> {
+        // Zero-sized buffers are invalid in Vulkan; round up so empty inputs stay representable.
+        let size = desc.size.max(4);
+        let info = vk::BufferCreateInfo::default()
+            .size(size)
+            .usage(desc.usage.0)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid device, create info lives until return.
+        let raw = unsafe { shared.device.create_buffer(&info, None) }.during("vkCreateBuffer")?;
+        // SAFETY: raw was just created from this device.
+        let requirements = unsafe { shared.device.get_buffer_memory_requirements(raw) };
+        let location = match desc.memory {
+            MemoryUse::Upload => MemoryLocation::CpuToGpu,
+            MemoryUse::Readback => MemoryLocation::GpuToCpu,
+            MemoryUse::DeviceLocal => MemoryLocation::GpuOnly,
+        };
+        let allocation = shared.allocator().allocate(&AllocationCreateDesc {
+            name: &desc.name,
+            requirements,
+            location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: the buffer is unused and has no memory bound.
+                unsafe { shared.device.destroy_buffer(raw, None) };
+                return Err(GpuError::Allocation {
+                    name: desc.name.clone(),
+                    detail: e.to_string(),
+                });
+            }
+        };
+        // SAFETY: the allocation satisfies the buffer's requirements and is bound once.
+        let bound = unsafe {
+            shared
+                .device
+                .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
+        }
+        .during("vkBindBufferMemory");
+        let buffer = Buffer {
+            raw,
+            allocation: Some(allocation),
+            desc,
+            shared: Arc::clone(shared),
+        };
+        bound.map(|()| buffer)
+    }
+
+    pub fn size(&self) -> u64 {
+        self.desc.size
+    }
+
+    /// Copies `data` to the start of a host-visible buffer.
+    pub fn write<T: bytemuck::Pod>(&mut self, data: &[T]) -> Result<(), GpuError> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let name = self.desc.name.clone();
+        let mapped = self
+            .allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .ok_or_else(|| GpuError::Allocation {
+                name: name.clone(),
+                detail: "buffer is not host-visible".into(),
+            })?;
+        if bytes.len() > mapped.len() {
+            return Err(GpuError::Allocation {
+                name,
+                detail: format!("{} bytes do not fit in {}", bytes.len(), mapped.len()),
+            });
+        }
+        mapped[..bytes.len()].copy_from_slice(bytes);
+        Ok(())
+    }
+
+    /// The first `self.size()` bytes of a host-visible buffer as `T`s. Call only after the fence
+    /// of the work that wrote it, with a device→host barrier in that work.
+    pub fn read<T: bytemuck::Pod>(&self) -> Result<Vec<T>, GpuError> {
+        let mapped = self
+            .allocation
+            .as_ref()
+            .and_then(|a| a.mapped_slice())
+            .ok_or_else(|| GpuError::Allocation {
+                name: self.desc.name.clone(),
+                detail: "buffer is not host-visible".into(),
+            })?;
+        let len = (self.desc.size as usize).min(mapped.len());
+        Ok(bytemuck::pod_collect_to_vec(&mapped[..len]))
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        // SAFETY: work using the buffer has completed (every submit waits on its fence).
+        unsafe { self.shared.device.destroy_buffer(self.raw, None) };
+        if let Some(allocation) = self.allocation.take() {
+            self.shared.free(allocation);
+        }
+    }
+}

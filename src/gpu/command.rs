@@ -1,0 +1,249 @@
+//! Recording commands. A [`Recorder`] wraps one command buffer between begin and end; its methods
+//! are the whole vocabulary the renderer uses, so no raw handle leaves `gpu/`.
+//!
+//! Synchronisation is explicit: every hazard between two uses is a barrier named by the two
+//! [`Access`]es, mapped to synchronization2 stages and access masks in `conv.rs`.
+
+use super::buffer::Buffer;
+use super::conv::{self, Access, Layout};
+use super::image::Image;
+use super::pipeline::{ComputePipeline, DescriptorSet, GraphicsPipeline};
+use ash::vk;
+
+/// A use of an image: the access and the layout it must be in.
+#[derive(Clone, Copy, Debug)]
+pub struct ImageUse {
+    pub access: Access,
+    pub layout: Layout,
+}
+
+impl ImageUse {
+    pub const fn new(access: Access, layout: Layout) -> Self {
+        Self { access, layout }
+    }
+}
+
+/// The attachments of one dynamic-rendering pass.
+pub struct RenderTargets<'a> {
+    /// Multisampled (or single-sampled) colour target, cleared to `clear_color`.
+    pub color: &'a Image,
+    /// Single-sampled image the colour is resolved into (averaged) when `color` is multisampled.
+    pub resolve: Option<&'a Image>,
+    pub depth: &'a Image,
+    pub clear_color: [f32; 4],
+}
+
+pub struct Recorder<'a> {
+    pub(crate) device: &'a ash::Device,
+    pub(crate) cmd: vk::CommandBuffer,
+}
+
+impl Recorder<'_> {
+    /// A global memory barrier: everything written with `from` is visible to `to`.
+    pub fn memory_barrier(&mut self, from: Access, to: Access) {
+        let (src_stage, src_access) = conv::stage_access(from);
+        let (dst_stage, dst_access) = conv::stage_access(to);
+        let barrier = vk::MemoryBarrier2::default()
+            .src_stage_mask(src_stage)
+            .src_access_mask(src_access)
+            .dst_stage_mask(dst_stage)
+            .dst_access_mask(dst_access);
+        let info =
+            vk::DependencyInfo::default().memory_barriers(std::slice::from_ref(&barrier));
+        // SAFETY: recording into a command buffer in the recording state.
+        unsafe { self.device.cmd_pipeline_barrier2(self.cmd, &info) };
+    }
+
+    /// An image barrier with a layout transition (all layers).
+    pub fn image_barrier(&mut self, image: &Image, from: ImageUse, to: ImageUse) {
+        let (src_stage, src_access) = conv::stage_access(from.access);
+        let (dst_stage, dst_access) = conv::stage_access(to.access);
+        let barrier = vk::ImageMemoryBarrier2::default()
+            .src_stage_mask(src_stage)
+            .src_access_mask(src_access)
+            .dst_stage_mask(dst_stage)
+            .dst_access_mask(dst_access)
+            .old_layout(conv::image_layout(from.layout))
+            .new_layout(conv::image_layout(to.layout))
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image.raw)
+            .subresource_range(image.full_range());
+        let info =
+            vk::DependencyInfo::default().image_memory_barriers(std::slice::from_ref(&barrier));
+        // SAFETY: recording; the image is live for the duration of the submit.
+        unsafe { self.device.cmd_pipeline_barrier2(self.cmd, &info) };
+    }
+
+    /// Begins dynamic rendering into `targets` (colour cleared, depth cleared to 1), with the
+    /// viewport and scissor covering the whole target. The images must already be in the
+    /// attachment layouts.
+    pub fn begin_rendering(&mut self, targets: &RenderTargets<'_>) {
+        let desc = targets.color.desc();
+        let extent = vk::Extent2D {
+            width: desc.width,
+            height: desc.height,
+        };
+        let mut color = vk::RenderingAttachmentInfo::default()
+            .image_view(targets.color.view)
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue {
+                color: vk::ClearColorValue {
+                    float32: targets.clear_color,
+                },
+            });
+        if let Some(resolve) = targets.resolve {
+            color = color
+                .resolve_mode(vk::ResolveModeFlags::AVERAGE)
+                .resolve_image_view(resolve.view)
+                .resolve_image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                // The multisampled samples are not needed after the resolve.
+                .store_op(vk::AttachmentStoreOp::DONT_CARE);
+        }
+        let depth = vk::RenderingAttachmentInfo::default()
+            .image_view(targets.depth.view)
+            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .clear_value(vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 1.0,
+                    stencil: 0,
+                },
+            });
+        let info = vk::RenderingInfo::default()
+            .render_area(vk::Rect2D {
+                offset: vk::Offset2D { x: 0, y: 0 },
+                extent,
+            })
+            .layer_count(1)
+            .color_attachments(std::slice::from_ref(&color))
+            .depth_attachment(&depth);
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: desc.width as f32,
+            height: desc.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        let scissor = vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent,
+        };
+        // SAFETY: recording; attachments are live and in the layouts named above.
+        unsafe {
+            self.device.cmd_begin_rendering(self.cmd, &info);
+            self.device
+                .cmd_set_viewport(self.cmd, 0, std::slice::from_ref(&viewport));
+            self.device
+                .cmd_set_scissor(self.cmd, 0, std::slice::from_ref(&scissor));
+        }
+    }
+
+    pub fn end_rendering(&mut self) {
+        // SAFETY: matches begin_rendering.
+        unsafe { self.device.cmd_end_rendering(self.cmd) };
+    }
+
+    pub fn bind_graphics(&mut self, pipeline: &GraphicsPipeline, set: &DescriptorSet) {
+        // SAFETY: recording; pipeline and set are live and compatible (same layout).
+        unsafe {
+            self.device
+                .cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
+            self.device.cmd_bind_descriptor_sets(
+                self.cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                pipeline.layout.raw,
+                0,
+                std::slice::from_ref(&set.raw),
+                &[],
+            );
+        }
+    }
+
+    /// Binds the interleaved vertex buffer (binding 0) and the u32 index buffer.
+    pub fn bind_mesh_buffers(&mut self, vertices: &Buffer, indices: &Buffer) {
+        // SAFETY: recording; buffers are live for the submit.
+        unsafe {
+            self.device
+                .cmd_bind_vertex_buffers(self.cmd, 0, std::slice::from_ref(&vertices.raw), &[0]);
+            self.device
+                .cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32);
+        }
+    }
+
+    pub fn draw_indexed(&mut self, index_count: u32) {
+        // SAFETY: recording inside a rendering pass with a pipeline and buffers bound.
+        unsafe { self.device.cmd_draw_indexed(self.cmd, index_count, 1, 0, 0, 0) };
+    }
+
+    pub fn bind_compute(&mut self, pipeline: &ComputePipeline, set: &DescriptorSet) {
+        // SAFETY: recording; pipeline and set are live and compatible.
+        unsafe {
+            self.device
+                .cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw);
+            self.device.cmd_bind_descriptor_sets(
+                self.cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                pipeline.layout.raw,
+                0,
+                std::slice::from_ref(&set.raw),
+                &[],
+            );
+        }
+    }
+
+    /// Push constants for a compute pipeline; `bytes` must fit its declared block.
+    pub fn push_constants(&mut self, pipeline: &ComputePipeline, bytes: &[u8]) {
+        let layout = &pipeline.layout;
+        let len = bytes.len().min(layout.push_constant_size as usize);
+        if len == 0 {
+            return;
+        }
+        // SAFETY: recording; the range is within the layout's push constant block.
+        unsafe {
+            self.device
+                .cmd_push_constants(self.cmd, layout.raw, layout.stages, 0, &bytes[..len])
+        };
+    }
+
+    pub fn dispatch(&mut self, x: u32, y: u32, z: u32) {
+        // SAFETY: recording with a compute pipeline bound.
+        unsafe { self.device.cmd_dispatch(self.cmd, x, y, z) };
+    }
+
+    /// Copies every layer of a single-sampled image (in TransferSrc layout) to the start of
+    /// `buffer`, tightly packed, layer after layer, row 0 first.
+    pub fn copy_image_to_buffer(&mut self, image: &Image, buffer: &Buffer) {
+        let desc = image.desc();
+        let region = vk::BufferImageCopy::default()
+            .buffer_offset(0)
+            .buffer_row_length(0)
+            .buffer_image_height(0)
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .mip_level(0)
+                    .base_array_layer(0)
+                    .layer_count(desc.layers),
+            )
+            .image_extent(vk::Extent3D {
+                width: desc.width,
+                height: desc.height,
+                depth: 1,
+            });
+        // SAFETY: recording; the buffer is large enough (image.byte_size()) and live.
+        unsafe {
+            self.device.cmd_copy_image_to_buffer(
+                self.cmd,
+                image.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                buffer.raw,
+                std::slice::from_ref(&region),
+            )
+        };
+    }
+}

@@ -1,0 +1,137 @@
+//! The logical device and everything whose lifetime is the device's: instance, messenger,
+//! allocator. Resources hold an `Arc<DeviceShared>`, so the device outlives every buffer, image and
+//! pipeline made from it, and `Drop` tears down in reverse creation order.
+
+use super::adapter::{choose_adapter, AdapterInfo};
+use super::debug::ValidationLog;
+use super::error::{GpuError, VkResultExt};
+use super::instance::{create_instance, InstanceParts};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, Allocator, AllocatorCreateDesc};
+use std::mem::ManuallyDrop;
+use std::sync::{Mutex, MutexGuard};
+
+pub(crate) struct DeviceShared {
+    pub device: ash::Device,
+    pub queue_family: u32,
+    pub info: AdapterInfo,
+    pub log: ValidationLog,
+    pub validation: bool,
+    allocator: ManuallyDrop<Mutex<Allocator>>,
+    instance: InstanceParts,
+}
+
+impl DeviceShared {
+    pub fn create(validation: bool, device_name: Option<&str>) -> Result<Self, GpuError> {
+        let log = ValidationLog::default();
+        let instance = create_instance(validation, &log)?;
+        // `log` stays alive here until the instance (and its messenger) is gone on every path.
+        match Self::create_on(instance, validation, device_name, log.clone()) {
+            Ok(shared) => Ok(shared),
+            Err((instance, err)) => {
+                destroy_instance(&instance);
+                Err(err)
+            }
+        }
+    }
+
+    fn create_on(
+        instance: InstanceParts,
+        validation: bool,
+        device_name: Option<&str>,
+        log: ValidationLog,
+    ) -> Result<Self, (InstanceParts, GpuError)> {
+        let adapter = match choose_adapter(&instance.instance, device_name) {
+            Ok(a) => a,
+            Err(e) => return Err((instance, e)),
+        };
+        let priorities = [1.0f32];
+        let queue_info = vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(adapter.queue_family)
+            .queue_priorities(&priorities);
+        let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
+            .dynamic_rendering(true)
+            .synchronization2(true);
+        let create_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(std::slice::from_ref(&queue_info))
+            .push_next(&mut features13);
+        // SAFETY: the physical device comes from this instance; create_info lives until return.
+        let device = match unsafe {
+            instance
+                .instance
+                .create_device(adapter.physical_device, &create_info, None)
+        }
+        .during("vkCreateDevice")
+        {
+            Ok(d) => d,
+            Err(e) => return Err((instance, e)),
+        };
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.instance.clone(),
+            device: device.clone(),
+            physical_device: adapter.physical_device,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        });
+        let allocator = match allocator {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: nothing was created from the device yet.
+                unsafe { device.destroy_device(None) };
+                return Err((
+                    instance,
+                    GpuError::Allocation {
+                        name: "allocator".into(),
+                        detail: e.to_string(),
+                    },
+                ));
+            }
+        };
+        Ok(DeviceShared {
+            device,
+            queue_family: adapter.queue_family,
+            info: adapter.info,
+            log,
+            validation,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            instance,
+        })
+    }
+
+    pub fn allocator(&self) -> MutexGuard<'_, Allocator> {
+        // A panic while holding the lock leaves the allocator's bookkeeping intact (its methods
+        // don't unwind midway through an update), so the poisoned guard is still usable.
+        self.allocator
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    pub fn free(&self, allocation: Allocation) {
+        // Freeing only fails for an allocation not from this allocator, which cannot happen here.
+        let _ = self.allocator().free(allocation);
+    }
+}
+
+impl Drop for DeviceShared {
+    fn drop(&mut self) {
+        // SAFETY: every resource holding an Arc to this struct is gone, so nothing uses the device;
+        // wait for queued work, then destroy allocator → device → messenger → instance.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device.destroy_device(None);
+        }
+        destroy_instance(&self.instance);
+    }
+}
+
+fn destroy_instance(parts: &InstanceParts) {
+    if let Some((loader, messenger)) = &parts.debug {
+        // SAFETY: the messenger was created from this instance and is destroyed once.
+        unsafe { loader.destroy_debug_utils_messenger(*messenger, None) };
+    }
+    // SAFETY: all children of the instance are destroyed by now.
+    unsafe { parts.instance.destroy_instance(None) };
+    let _ = &parts.entry;
+}

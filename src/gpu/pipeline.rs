@@ -1,0 +1,467 @@
+//! Pipelines (compute and graphics), their layouts, and descriptor sets.
+//!
+//! Each pipeline has one descriptor set (set 0) whose bindings it declares, and an optional push
+//! constant block visible to all its stages. Descriptor sets are allocated from a small pool of
+//! their own, so a set and its pool live and die together.
+
+use super::buffer::Buffer;
+use super::conv::{self, Format};
+use super::device::DeviceShared;
+use super::error::{GpuError, VkResultExt};
+use super::image::{Image, Sampler};
+use ash::vk;
+use std::sync::Arc;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BindingKind {
+    UniformBuffer,
+    StorageBuffer,
+    SampledImage,
+    StorageImage,
+}
+
+/// One binding of set 0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Binding {
+    pub index: u32,
+    pub kind: BindingKind,
+}
+
+impl Binding {
+    pub const fn new(index: u32, kind: BindingKind) -> Self {
+        Self { index, kind }
+    }
+}
+
+fn descriptor_type(kind: BindingKind) -> vk::DescriptorType {
+    match kind {
+        BindingKind::UniformBuffer => vk::DescriptorType::UNIFORM_BUFFER,
+        BindingKind::StorageBuffer => vk::DescriptorType::STORAGE_BUFFER,
+        BindingKind::SampledImage => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+        BindingKind::StorageImage => vk::DescriptorType::STORAGE_IMAGE,
+    }
+}
+
+/// Set layout + pipeline layout, shared by both pipeline kinds.
+pub struct PipelineLayout {
+    pub(crate) set_layout: vk::DescriptorSetLayout,
+    pub(crate) raw: vk::PipelineLayout,
+    pub(crate) stages: vk::ShaderStageFlags,
+    pub(crate) push_constant_size: u32,
+    bindings: Vec<Binding>,
+    shared: Arc<DeviceShared>,
+}
+
+impl PipelineLayout {
+    fn new(
+        shared: &Arc<DeviceShared>,
+        bindings: &[Binding],
+        stages: vk::ShaderStageFlags,
+        push_constant_size: u32,
+    ) -> Result<Self, GpuError> {
+        let vk_bindings: Vec<vk::DescriptorSetLayoutBinding> = bindings
+            .iter()
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b.index)
+                    .descriptor_type(descriptor_type(b.kind))
+                    .descriptor_count(1)
+                    .stage_flags(stages)
+            })
+            .collect();
+        let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&vk_bindings);
+        // SAFETY: valid device; info lives until return.
+        let set_layout = unsafe { shared.device.create_descriptor_set_layout(&info, None) }
+            .during("vkCreateDescriptorSetLayout")?;
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(stages)
+            .offset(0)
+            .size(push_constant_size)];
+        let mut info =
+            vk::PipelineLayoutCreateInfo::default().set_layouts(std::slice::from_ref(&set_layout));
+        if push_constant_size > 0 {
+            info = info.push_constant_ranges(&ranges);
+        }
+        // SAFETY: valid device; set_layout is live.
+        let raw = match unsafe { shared.device.create_pipeline_layout(&info, None) } {
+            Ok(raw) => raw,
+            Err(result) => {
+                // SAFETY: created above, unused.
+                unsafe { shared.device.destroy_descriptor_set_layout(set_layout, None) };
+                return Err(super::error::from_vk("vkCreatePipelineLayout", result));
+            }
+        };
+        Ok(PipelineLayout {
+            set_layout,
+            raw,
+            stages,
+            push_constant_size,
+            bindings: bindings.to_vec(),
+            shared: Arc::clone(shared),
+        })
+    }
+}
+
+impl Drop for PipelineLayout {
+    fn drop(&mut self) {
+        // SAFETY: no pipeline or set made from these layouts is in use any more.
+        unsafe {
+            self.shared.device.destroy_pipeline_layout(self.raw, None);
+            self.shared
+                .device
+                .destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+/// A shader module that lives only while a pipeline is being created.
+struct ShaderModule<'a> {
+    raw: vk::ShaderModule,
+    device: &'a ash::Device,
+}
+
+impl<'a> ShaderModule<'a> {
+    fn new(device: &'a ash::Device, name: &'static str, spirv: &[u8]) -> Result<Self, GpuError> {
+        let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv)).map_err(|e| {
+            GpuError::Shader {
+                name,
+                detail: e.to_string(),
+            }
+        })?;
+        let info = vk::ShaderModuleCreateInfo::default().code(&words);
+        // SAFETY: the words are SPIR-V produced by build.rs; info lives until return.
+        let raw = unsafe { device.create_shader_module(&info, None) }
+            .during("vkCreateShaderModule")?;
+        Ok(ShaderModule { raw, device })
+    }
+}
+
+impl Drop for ShaderModule<'_> {
+    fn drop(&mut self) {
+        // SAFETY: modules are only needed during pipeline creation.
+        unsafe { self.device.destroy_shader_module(self.raw, None) };
+    }
+}
+
+/// A compute pipeline.
+pub struct ComputePipeline {
+    pub(crate) raw: vk::Pipeline,
+    pub(crate) layout: PipelineLayout,
+}
+
+impl ComputePipeline {
+    pub(crate) fn new(
+        shared: &Arc<DeviceShared>,
+        name: &'static str,
+        spirv: &[u8],
+        bindings: &[Binding],
+        push_constant_size: u32,
+    ) -> Result<Self, GpuError> {
+        let layout = PipelineLayout::new(
+            shared,
+            bindings,
+            vk::ShaderStageFlags::COMPUTE,
+            push_constant_size,
+        )?;
+        let module = ShaderModule::new(&shared.device, name, spirv)?;
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module.raw)
+            .name(c"main");
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(layout.raw);
+        // SAFETY: module and layout are live; info lives until return.
+        let raw = unsafe {
+            shared.device.create_compute_pipelines(
+                vk::PipelineCache::null(),
+                std::slice::from_ref(&info),
+                None,
+            )
+        }
+        .map_err(|(_, result)| super::error::from_vk("vkCreateComputePipelines", result))?;
+        Ok(ComputePipeline {
+            raw: raw[0],
+            layout,
+        })
+    }
+
+    pub fn layout(&self) -> &PipelineLayout {
+        &self.layout
+    }
+}
+
+impl Drop for ComputePipeline {
+    fn drop(&mut self) {
+        // SAFETY: no pending work uses the pipeline.
+        unsafe { self.layout.shared.device.destroy_pipeline(self.raw, None) };
+    }
+}
+
+/// One vertex attribute of an interleaved f32 vertex buffer (binding 0).
+#[derive(Clone, Copy, Debug)]
+pub struct VertexAttribute {
+    pub location: u32,
+    pub offset: u32,
+    /// Number of f32 components (1–4).
+    pub components: u32,
+}
+
+pub struct GraphicsPipelineDesc<'a> {
+    pub name: &'static str,
+    pub vertex_spirv: &'a [u8],
+    pub fragment_spirv: &'a [u8],
+    pub bindings: &'a [Binding],
+    pub vertex_stride: u32,
+    pub vertex_attributes: &'a [VertexAttribute],
+    pub color_format: Format,
+    pub depth_format: Format,
+    pub samples: u32,
+}
+
+/// A graphics pipeline for dynamic rendering (no render pass objects), with dynamic viewport and
+/// scissor, depth test less, no culling (the BRDF is zero for back faces anyway: nv <= 0).
+pub struct GraphicsPipeline {
+    pub(crate) raw: vk::Pipeline,
+    pub(crate) layout: PipelineLayout,
+}
+
+impl GraphicsPipeline {
+    pub(crate) fn new(
+        shared: &Arc<DeviceShared>,
+        desc: &GraphicsPipelineDesc<'_>,
+    ) -> Result<Self, GpuError> {
+        let layout = PipelineLayout::new(
+            shared,
+            desc.bindings,
+            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+            0,
+        )?;
+        let vertex = ShaderModule::new(&shared.device, desc.name, desc.vertex_spirv)?;
+        let fragment = ShaderModule::new(&shared.device, desc.name, desc.fragment_spirv)?;
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(vertex.raw)
+                .name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(fragment.raw)
+                .name(c"main"),
+        ];
+        let binding = vk::VertexInputBindingDescription::default()
+            .binding(0)
+            .stride(desc.vertex_stride)
+            .input_rate(vk::VertexInputRate::VERTEX);
+        let attributes: Vec<vk::VertexInputAttributeDescription> = desc
+            .vertex_attributes
+            .iter()
+            .map(|a| {
+                vk::VertexInputAttributeDescription::default()
+                    .location(a.location)
+                    .binding(0)
+                    .format(match a.components {
+                        1 => vk::Format::R32_SFLOAT,
+                        2 => vk::Format::R32G32_SFLOAT,
+                        3 => vk::Format::R32G32B32_SFLOAT,
+                        _ => vk::Format::R32G32B32A32_SFLOAT,
+                    })
+                    .offset(a.offset)
+            })
+            .collect();
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(std::slice::from_ref(&binding))
+            .vertex_attribute_descriptions(&attributes);
+        let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::NONE)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(conv::sample_count_flag(desc.samples));
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(true)
+            .depth_compare_op(vk::CompareOp::LESS);
+        let blend_attachment = vk::PipelineColorBlendAttachmentState::default()
+            .blend_enable(false)
+            .color_write_mask(vk::ColorComponentFlags::RGBA);
+        let blend = vk::PipelineColorBlendStateCreateInfo::default()
+            .attachments(std::slice::from_ref(&blend_attachment));
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let color_formats = [conv::vk_format(desc.color_format)];
+        let mut rendering = vk::PipelineRenderingCreateInfo::default()
+            .color_attachment_formats(&color_formats)
+            .depth_attachment_format(conv::vk_format(desc.depth_format));
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&input_assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(layout.raw)
+            .push_next(&mut rendering);
+        // SAFETY: every struct referenced by info lives on this stack frame until return.
+        let raw = unsafe {
+            shared.device.create_graphics_pipelines(
+                vk::PipelineCache::null(),
+                std::slice::from_ref(&info),
+                None,
+            )
+        }
+        .map_err(|(_, result)| super::error::from_vk("vkCreateGraphicsPipelines", result))?;
+        Ok(GraphicsPipeline {
+            raw: raw[0],
+            layout,
+        })
+    }
+
+    pub fn layout(&self) -> &PipelineLayout {
+        &self.layout
+    }
+}
+
+impl Drop for GraphicsPipeline {
+    fn drop(&mut self) {
+        // SAFETY: no pending work uses the pipeline.
+        unsafe { self.layout.shared.device.destroy_pipeline(self.raw, None) };
+    }
+}
+
+/// What a binding points at.
+pub enum Resource<'a> {
+    Buffer(&'a Buffer),
+    SampledImage(&'a Image, &'a Sampler),
+    StorageImage(&'a Image),
+}
+
+/// Set 0 of a pipeline, filled in once.
+pub struct DescriptorSet {
+    pub(crate) raw: vk::DescriptorSet,
+    pool: vk::DescriptorPool,
+    shared: Arc<DeviceShared>,
+}
+
+impl DescriptorSet {
+    pub(crate) fn new(
+        shared: &Arc<DeviceShared>,
+        layout: &PipelineLayout,
+        resources: &[(u32, Resource<'_>)],
+    ) -> Result<Self, GpuError> {
+        let sizes: Vec<vk::DescriptorPoolSize> = layout
+            .bindings
+            .iter()
+            .map(|b| vk::DescriptorPoolSize {
+                ty: descriptor_type(b.kind),
+                descriptor_count: 1,
+            })
+            .collect();
+        let info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(1)
+            .pool_sizes(&sizes);
+        // SAFETY: valid device; info lives until return.
+        let pool = unsafe { shared.device.create_descriptor_pool(&info, None) }
+            .during("vkCreateDescriptorPool")?;
+        let mut set = DescriptorSet {
+            raw: vk::DescriptorSet::null(),
+            pool,
+            shared: Arc::clone(shared),
+        };
+        let alloc = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(pool)
+            .set_layouts(std::slice::from_ref(&layout.set_layout));
+        // SAFETY: pool and layout are live.
+        set.raw = unsafe { shared.device.allocate_descriptor_sets(&alloc) }
+            .during("vkAllocateDescriptorSets")?[0];
+        set.write(layout, resources)?;
+        Ok(set)
+    }
+
+    fn write(
+        &self,
+        layout: &PipelineLayout,
+        resources: &[(u32, Resource<'_>)],
+    ) -> Result<(), GpuError> {
+        let mut buffer_infos = Vec::new();
+        let mut image_infos = Vec::new();
+        for (index, resource) in resources {
+            match resource {
+                Resource::Buffer(b) => buffer_infos.push((
+                    *index,
+                    vk::DescriptorBufferInfo {
+                        buffer: b.raw,
+                        offset: 0,
+                        range: vk::WHOLE_SIZE,
+                    },
+                )),
+                Resource::SampledImage(image, sampler) => image_infos.push((
+                    *index,
+                    vk::DescriptorImageInfo {
+                        sampler: sampler.raw,
+                        image_view: image.view,
+                        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    },
+                )),
+                Resource::StorageImage(image) => image_infos.push((
+                    *index,
+                    vk::DescriptorImageInfo {
+                        sampler: vk::Sampler::null(),
+                        image_view: image.storage_view.unwrap_or(image.view),
+                        image_layout: vk::ImageLayout::GENERAL,
+                    },
+                )),
+            }
+        }
+        let kind_of = |index: u32| -> Result<vk::DescriptorType, GpuError> {
+            layout
+                .bindings
+                .iter()
+                .find(|b| b.index == index)
+                .map(|b| descriptor_type(b.kind))
+                .ok_or(GpuError::Limit {
+                    what: "descriptor binding index (not in the pipeline layout)",
+                    value: u64::from(index),
+                    limit: layout.bindings.len() as u64,
+                })
+        };
+        let mut writes = Vec::new();
+        for (index, info) in &buffer_infos {
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(self.raw)
+                    .dst_binding(*index)
+                    .descriptor_type(kind_of(*index)?)
+                    .buffer_info(std::slice::from_ref(info)),
+            );
+        }
+        for (index, info) in &image_infos {
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(self.raw)
+                    .dst_binding(*index)
+                    .descriptor_type(kind_of(*index)?)
+                    .image_info(std::slice::from_ref(info)),
+            );
+        }
+        // SAFETY: the set is not in use by any pending command buffer; infos outlive the call.
+        unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
+        Ok(())
+    }
+}
+
+impl Drop for DescriptorSet {
+    fn drop(&mut self) {
+        // SAFETY: destroying the pool frees its set; no pending work uses it.
+        unsafe { self.shared.device.destroy_descriptor_pool(self.pool, None) };
+    }
+}

@@ -1,0 +1,667 @@
+//! The Fresnel table of SPEC §3: RGB reflectance against θ = acos(V·H) in degrees, 0..=90,
+//! linearly interpolated. Built from a CSV file (RGB, or spectral through [`super::spectral`]) or,
+//! by default, from the exact unpolarised dielectric Fresnel equations for the dispersive lacquer
+//! n(λ) = A + B/λ².
+//!
+//! Owns the table type, its CSV format (read and write) and the dielectric equations. It does not
+//! know about materials or the BRDF; those call [`FresnelTable::eval`].
+
+use std::path::Path;
+
+use super::cie::GRID_LEN;
+use super::spectral::{
+    grid_reflectance_to_rgb, grid_wavelength_nm, lerp, locate, reflectance_to_rgb,
+};
+use crate::{Error, Result};
+
+/// The header of an RGB table, exactly as SPEC §3 writes it.
+pub const RGB_HEADER: &str = "angle_deg,r,g,b";
+
+/// The spectral range a spectral table must cover [nm] (SPEC §3: "covering 380–780 nm").
+const SPECTRAL_COVER_NM: (f64, f64) = (380.0, 780.0);
+
+/// F(θ) as a table: angles in degrees (first 0, last 90, strictly increasing) and linear RGB.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FresnelTable {
+    angles_deg: Vec<f64>,
+    rgb: Vec<[f64; 3]>,
+}
+
+impl FresnelTable {
+    /// A table from its entries, validated as SPEC §3 requires of an RGB table: at least two rows,
+    /// equal lengths, angles finite and strictly increasing from exactly 0 to exactly 90, values
+    /// finite and in [0, 1].
+    pub fn new(angles_deg: Vec<f64>, rgb: Vec<[f64; 3]>) -> Result<Self> {
+        for (i, c) in rgb.iter().enumerate() {
+            if c.iter().any(|v| !(0.0..=1.0).contains(v)) {
+                return Err(Error::invalid(
+                    format!("fresnel table rgb[{i}]"),
+                    format!("{c:?}"),
+                    "each channel is a reflectance and must be a finite value in [0, 1]",
+                ));
+            }
+        }
+        Self::with_checked_angles(angles_deg, rgb)
+    }
+
+    /// Reads a CSV file and parses it with [`FresnelTable::from_csv_str`], naming the file in errors.
+    pub fn from_csv_file(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_csv_str(&text, &path.display().to_string())
+    }
+
+    /// Parses a CSV table: header `angle_deg,r,g,b` (RGB) or `angle_deg,<nm>,<nm>,…` (spectral,
+    /// converted through the spectral path). A UTF-8 BOM, CRLF line ends, whitespace around cells
+    /// and blank lines at the end are accepted; anything else that is off is an
+    /// [`Error::Parse`] naming `source` and the 1-based line.
+    pub fn from_csv_str(text: &str, source: &str) -> Result<Self> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let lines: Vec<&str> = text.lines().map(str::trim).collect();
+        let Some(last) = lines.iter().rposition(|l| !l.is_empty()) else {
+            return Err(Error::parse(
+                source,
+                1,
+                format!("empty file; {EXPECTED_HEADER}"),
+            ));
+        };
+        let header = parse_header(lines[0], source)?;
+        let mut angles_deg: Vec<f64> = Vec::new();
+        let mut values: Vec<Vec<f64>> = Vec::new();
+        for (index, line) in lines.iter().enumerate().take(last + 1).skip(1) {
+            let fail = |message: String| Error::parse(source, index + 1, message);
+            let mut row = parse_row(line, &header).map_err(fail)?;
+            check_next_angle(row[0], angles_deg.last().copied()).map_err(fail)?;
+            angles_deg.push(row[0]);
+            values.push(row.split_off(1));
+        }
+        match angles_deg.last() {
+            None => Err(Error::parse(source, 1, NO_ROWS)),
+            Some(&angle) if angle != 90.0 => Err(Error::parse(
+                source,
+                last + 1,
+                format!("the last angle must be 90 (the table spans 0..90 degrees), found {angle}"),
+            )),
+            Some(_) => {
+                let rgb = match &header {
+                    Header::Rgb => values.iter().map(|v| [v[0], v[1], v[2]]).collect(),
+                    Header::Spectral(nm) => {
+                        values.iter().map(|v| reflectance_to_rgb(nm, v)).collect()
+                    }
+                };
+                // The spectral path does not clamp (SPEC §3 says nothing of it), so a converted
+                // spectral table may leave [0, 1] slightly; only its structure is re-checked.
+                Self::with_checked_angles(angles_deg, rgb)
+            }
+        }
+    }
+
+    /// The default table (SPEC §3): exact unpolarised dielectric Fresnel for n(λ) = A + B/λ²,
+    /// through the spectral path, at every whole degree 0..=90.
+    pub fn dielectric(ior_a: f64, ior_b: f64) -> Result<Self> {
+        check_ior(ior_a, ior_b)?;
+        let angles_deg: Vec<f64> = (0..=90).map(f64::from).collect();
+        let rgb = angles_deg
+            .iter()
+            .map(|&deg| {
+                // cos(90°) in floating point is 6e-17, not 0; the grazing row is exactly F = 1.
+                let cos_theta = if deg == 90.0 {
+                    0.0
+                } else {
+                    deg.to_radians().cos()
+                };
+                let spectrum: [f64; GRID_LEN] = std::array::from_fn(|i| {
+                    dielectric_reflectance(
+                        cos_theta,
+                        lacquer_ior(grid_wavelength_nm(i), ior_a, ior_b),
+                    )
+                });
+                grid_reflectance_to_rgb(&spectrum)
+            })
+            .collect();
+        Self::with_checked_angles(angles_deg, rgb)
+    }
+
+    /// F(θ), linear interpolation between entries; θ in degrees, clamped to [0, 90] (NaN → 0).
+    pub fn eval(&self, theta_deg: f64) -> [f64; 3] {
+        let (k, t) = locate(&self.angles_deg, theta_deg);
+        let (lo, hi) = (self.rgb[k], self.rgb[k + 1]);
+        [
+            lerp(lo[0], hi[0], t),
+            lerp(lo[1], hi[1], t),
+            lerp(lo[2], hi[2], t),
+        ]
+    }
+
+    /// The table's angles [degrees].
+    pub fn angles_deg(&self) -> &[f64] {
+        &self.angles_deg
+    }
+
+    /// The table's linear RGB reflectances, one per angle.
+    pub fn rgb(&self) -> &[[f64; 3]] {
+        &self.rgb
+    }
+
+    /// The table as an RGB CSV (header [`RGB_HEADER`]). Values use Rust's `{}` for f64, the
+    /// shortest text that parses back to the same bits, so `from_csv_str(to_csv())` is exact.
+    pub fn to_csv(&self) -> String {
+        let mut csv = format!("{RGB_HEADER}\n");
+        for (angle, c) in self.angles_deg.iter().zip(&self.rgb) {
+            csv.push_str(&format!("{angle},{},{},{}\n", c[0], c[1], c[2]));
+        }
+        csv
+    }
+
+    /// Structure checks shared by every constructor: ≥ 2 rows, equal lengths, finite values,
+    /// angles strictly increasing from exactly 0 to exactly 90.
+    fn with_checked_angles(angles_deg: Vec<f64>, rgb: Vec<[f64; 3]>) -> Result<Self> {
+        let bad =
+            |field: String, value: String, reason: &str| Err(Error::invalid(field, value, reason));
+        if angles_deg.len() != rgb.len() || angles_deg.len() < 2 {
+            return bad(
+                "fresnel table".into(),
+                format!("{} angles, {} rgb rows", angles_deg.len(), rgb.len()),
+                "needs one rgb row per angle and at least two rows (0 and 90 degrees)",
+            );
+        }
+        for (i, c) in rgb.iter().enumerate() {
+            if c.iter().any(|v| !v.is_finite()) {
+                return bad(
+                    format!("fresnel table rgb[{i}]"),
+                    format!("{c:?}"),
+                    "values must be finite",
+                );
+            }
+        }
+        let last = angles_deg.len() - 1;
+        if angles_deg[0] != 0.0 || angles_deg[last] != 90.0 {
+            return bad(
+                "fresnel table angles_deg".into(),
+                format!("{} .. {}", angles_deg[0], angles_deg[last]),
+                "the angles must start at exactly 0 and end at exactly 90 degrees",
+            );
+        }
+        for i in 1..angles_deg.len() {
+            // `!(a < b)` also rejects NaN.
+            if angles_deg[i - 1].partial_cmp(&angles_deg[i]) != Some(std::cmp::Ordering::Less) {
+                return bad(
+                    format!("fresnel table angles_deg[{i}]"),
+                    angles_deg[i].to_string(),
+                    "angles must be finite and strictly increasing",
+                );
+            }
+        }
+        Ok(FresnelTable { angles_deg, rgb })
+    }
+}
+
+/// The two kinds of CSV header.
+enum Header {
+    Rgb,
+    /// Wavelengths [nm], strictly increasing, covering 380–780.
+    Spectral(Vec<f64>),
+}
+
+impl Header {
+    fn channel_count(&self) -> usize {
+        match self {
+            Header::Rgb => 3,
+            Header::Spectral(nm) => nm.len(),
+        }
+    }
+
+    fn column_name(&self, column: usize) -> String {
+        match (self, column) {
+            (_, 0) => "angle_deg".into(),
+            (Header::Rgb, c) => ["r", "g", "b"][(c - 1).min(2)].into(),
+            (Header::Spectral(nm), c) => format!("{} nm", nm[c - 1]),
+        }
+    }
+}
+
+const EXPECTED_HEADER: &str = "expected the header `angle_deg,r,g,b` (RGB) or \
+    `angle_deg,<wavelength_nm>,<wavelength_nm>,…` (spectral, covering 380–780 nm), then one row \
+    per angle from 0 to 90 degrees";
+
+const NO_ROWS: &str =
+    "the header has no data rows after it; add rows for 0..90 degrees (at least 0 and 90)";
+
+/// The header on line 1: RGB, or spectral with valid wavelengths.
+fn parse_header(line: &str, source: &str) -> Result<Header> {
+    let fail = |message: String| Err(Error::parse(source, 1, message));
+    let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+    if cells[0] != "angle_deg" {
+        if cells[0].parse::<f64>().is_ok() {
+            return fail(format!("missing header: line 1 is data; {EXPECTED_HEADER}"));
+        }
+        return fail(format!("wrong header `{line}`; {EXPECTED_HEADER}"));
+    }
+    if cells[1..] == ["r", "g", "b"] {
+        return Ok(Header::Rgb);
+    }
+    let mut nm = Vec::with_capacity(cells.len() - 1);
+    for (column, cell) in cells.iter().enumerate().skip(1) {
+        match cell.parse::<f64>() {
+            Ok(v) if v.is_finite() => nm.push(v),
+            _ => {
+                let n = column + 1;
+                return fail(format!(
+                    "wrong header: column {n} `{cell}` is not a wavelength in nm; {EXPECTED_HEADER}"
+                ));
+            }
+        }
+    }
+    if nm.len() < 2 {
+        return fail(format!("wrong header `{line}`; {EXPECTED_HEADER}"));
+    }
+    if let Some(i) = (1..nm.len()).find(|&i| nm[i] <= nm[i - 1]) {
+        let (here, before) = (nm[i], nm[i - 1]);
+        return fail(format!(
+            "wavelength {here} nm is not greater than {before} nm before it; \
+             wavelengths must strictly increase"
+        ));
+    }
+    let (lo, hi) = SPECTRAL_COVER_NM;
+    let (first, last) = (nm[0], nm[nm.len() - 1]);
+    if first > lo || last < hi {
+        return fail(format!(
+            "wavelengths {first}–{last} nm do not cover {lo}–{hi} nm; \
+             add columns down to {lo} nm and up to {hi} nm"
+        ));
+    }
+    Ok(Header::Spectral(nm))
+}
+
+/// One data row: `1 + channels` finite numbers, reflectances in [0, 1]; or why not.
+fn parse_row(line: &str, header: &Header) -> std::result::Result<Vec<f64>, String> {
+    if line.is_empty() {
+        return Err(
+            "blank line inside the table; remove it (blank lines are allowed only at the end)"
+                .into(),
+        );
+    }
+    let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+    let columns = 1 + header.channel_count();
+    if cells.len() != columns {
+        let found = cells.len();
+        return Err(format!(
+            "expected {columns} comma-separated columns as in the header on line 1, found {found}"
+        ));
+    }
+    let mut row = Vec::with_capacity(columns);
+    for (column, cell) in cells.iter().enumerate() {
+        let name = header.column_name(column);
+        let v = match cell.parse::<f64>() {
+            Ok(v) if v.is_finite() => v,
+            Ok(_) => {
+                return Err(format!(
+                    "`{name}` = `{cell}` is not finite; use a finite number"
+                ))
+            }
+            Err(_) if cell.is_empty() => {
+                return Err(format!("`{name}` is empty; put a number there"))
+            }
+            Err(_) => return Err(format!("`{name}` = `{cell}` is not a number")),
+        };
+        if column > 0 && !(0.0..=1.0).contains(&v) {
+            return Err(format!(
+                "`{name}` = {v} is outside [0, 1]; reflectance values must be in [0, 1]"
+            ));
+        }
+        row.push(v);
+    }
+    Ok(row)
+}
+
+/// Angles start at 0, strictly increase and stay ≤ 90 (the last-is-90 rule is checked at the end).
+fn check_next_angle(angle: f64, previous: Option<f64>) -> std::result::Result<(), String> {
+    match previous {
+        None if angle != 0.0 => Err(format!(
+            "the first angle must be 0 (the table spans 0..90 degrees), found {angle}"
+        )),
+        Some(previous) if angle <= previous => Err(format!(
+            "angle {angle} is not greater than the previous angle {previous}; \
+             angles must strictly increase"
+        )),
+        _ if angle > 90.0 => Err(format!(
+            "angle {angle} is above 90; the table spans 0..90 degrees and must end at 90"
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The IOR law's parameter ranges (SPEC §3 defaults A = 1.5, B = 0.0045 µm²): A ≥ 1 keeps n ≥ 1
+/// (air → lacquer, no total internal reflection); B ≥ 0 is normal dispersion.
+pub(crate) fn check_ior(ior_a: f64, ior_b: f64) -> Result<()> {
+    if !(ior_a.is_finite() && ior_a >= 1.0) {
+        return Err(Error::invalid(
+            "ior_a",
+            ior_a,
+            "must be a finite number >= 1 (lacquer is denser than air; default 1.5)",
+        ));
+    }
+    if !(ior_b.is_finite() && ior_b >= 0.0) {
+        return Err(Error::invalid(
+            "ior_b",
+            ior_b,
+            "must be a finite number >= 0 in µm² (normal dispersion; default 0.0045)",
+        ));
+    }
+    Ok(())
+}
+
+/// Unpolarised dielectric reflectance from air, F = (r_s² + r_p²)/2, exact; n = relative IOR.
+///
+/// Snell: sin²θt = sin²θi / n², with sin²θi = (1 - cos θi)(1 + cos θi) (no cancellation at
+/// normal incidence). cos θi is clamped to [0, 1]. n must be positive; for n < 1 total internal
+/// reflection gives 1. At grazing incidence r_s = r_p = -1 exactly, so F(0) = 1 exactly.
+pub fn dielectric_reflectance(cos_theta_i: f64, n: f64) -> f64 {
+    let cos_i = cos_theta_i.clamp(0.0, 1.0);
+    let sin_t2 = (1.0 - cos_i) * (1.0 + cos_i) / (n * n);
+    if sin_t2 >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin_t2).sqrt();
+    let r_s = (cos_i - n * cos_t) / (cos_i + n * cos_t);
+    let r_p = (n * cos_i - cos_t) / (n * cos_i + cos_t);
+    0.5 * (r_s * r_s + r_p * r_p)
+}
+
+/// n(λ) = A + B/λ², λ in µm.
+pub fn lacquer_ior(wavelength_nm: f64, ior_a: f64, ior_b: f64) -> f64 {
+    let lambda_um = wavelength_nm * 1e-3;
+    ior_a + ior_b / (lambda_um * lambda_um)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The line number and message of a CSV that must fail to parse.
+    fn csv_error(text: &str) -> (usize, String) {
+        match FresnelTable::from_csv_str(text, "test.csv") {
+            Err(Error::Parse {
+                file,
+                line,
+                message,
+            }) => {
+                assert_eq!(file, "test.csv");
+                (line, message)
+            }
+            other => panic!("expected a parse error for {text:?}, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn dielectric_normal_incidence_is_the_closed_form() {
+        // ((n-1)/(n+1))² at cos = 1; the exact equations reduce to it, so only rounding (1e-15).
+        for n in [1.0_f64, 1.33, 1.5, 1.51, 2.4] {
+            let expected = ((n - 1.0) / (n + 1.0)).powi(2);
+            assert!(
+                (dielectric_reflectance(1.0, n) - expected).abs() < 1e-15,
+                "n = {n}"
+            );
+        }
+    }
+
+    #[test]
+    fn dielectric_grazing_incidence_is_one() {
+        assert_eq!(dielectric_reflectance(0.0, 1.5), 1.0);
+        // Continuity: 1e-6 from grazing, 1 - F ≈ 4·cos/ (n cos_t-ish) ≈ 1e-5.
+        assert!(dielectric_reflectance(1e-6, 1.5) > 0.9999);
+    }
+
+    #[test]
+    fn dielectric_brewster_angle_has_no_p_reflection() {
+        // At tan θB = n, r_p = 0 and θB + θt = 90°, so r_s = -sin(θB - θt) and F = sin²(θB - θt)/2.
+        for n in [1.33, 1.5, 1.7] {
+            let theta_b = f64::atan(n);
+            let theta_t = (theta_b.sin() / n).asin();
+            let expected = 0.5 * (theta_b - theta_t).sin().powi(2);
+            let got = dielectric_reflectance(theta_b.cos(), n);
+            assert!(
+                (got - expected).abs() < 1e-14,
+                "n = {n}: {got} vs {expected}"
+            );
+        }
+    }
+
+    #[test]
+    fn dielectric_matches_the_sine_and_tangent_forms() {
+        // r_s = -sin(θi-θt)/sin(θi+θt), r_p = tan(θi-θt)/tan(θi+θt): Fresnel's angle forms, an
+        // independent route to the same numbers (rounding: 1e-14).
+        let n = 1.5;
+        for deg in [10.0, 35.0, 50.0, 75.0, 89.0] {
+            let ti: f64 = f64::to_radians(deg);
+            let tt = (ti.sin() / n).asin();
+            let rs = -(ti - tt).sin() / (ti + tt).sin();
+            let rp = (ti - tt).tan() / (ti + tt).tan();
+            let expected = 0.5 * (rs * rs + rp * rp);
+            assert!(
+                (dielectric_reflectance(ti.cos(), n) - expected).abs() < 1e-14,
+                "{deg}°"
+            );
+        }
+    }
+
+    #[test]
+    fn lacquer_ior_is_cauchy_in_micrometres() {
+        // n(589 nm) = 1.5 + 0.0045 / 0.589² ≈ 1.51297 (SPEC: "n ≈ 1.51 at 589 nm").
+        let n = lacquer_ior(589.0, 1.5, 0.0045);
+        assert!((n - (1.5 + 0.0045 / 0.346921)).abs() < 1e-12, "{n}");
+        assert!((n - 1.51297).abs() < 1e-5);
+    }
+
+    #[test]
+    fn default_dielectric_table_is_grey_and_about_four_percent_face_on() {
+        let table = FresnelTable::dielectric(1.5, 0.0045).unwrap();
+        let expected_angles: Vec<f64> = (0..=90).map(f64::from).collect();
+        assert_eq!(table.angles_deg(), expected_angles.as_slice());
+        // Each channel is a weighted average of R(λ) between R(780 nm) and R(380 nm) (closed form
+        // at normal incidence); the sRGB weights have small negative lobes, hence 2% slack.
+        let r0 = |nm: f64| {
+            let n = lacquer_ior(nm, 1.5, 0.0045);
+            ((n - 1.0) / (n + 1.0)).powi(2)
+        };
+        let (lo, hi) = (r0(780.0) * 0.98, r0(380.0) * 1.02);
+        let f0 = table.eval(0.0);
+        for c in f0 {
+            assert!(c > lo && c < hi, "{f0:?} not in [{lo}, {hi}]");
+            // SPEC: ≈ ((1.51 - 1)/2.51)² = 0.0413; the ȳ-weighted n is ≈ 1.514, so 0.0413..0.043.
+            assert!((0.0405..0.0435).contains(&c), "{f0:?}");
+        }
+        // Dispersion makes blue reflect slightly more, but the table is grey to within 5%.
+        assert!(f0[2] > f0[0]);
+        assert!((f0[2] - f0[0]) / f0[1] < 0.05, "{f0:?}");
+        // Grazing: F = 1 for every λ, and flat 1 maps to exactly (1, 1, 1).
+        assert_eq!(table.eval(90.0), [1.0; 3]);
+    }
+
+    #[test]
+    fn dielectric_rejects_bad_ior() {
+        for (a, b, field) in [
+            (0.9, 0.0, "ior_a"),
+            (f64::NAN, 0.0, "ior_a"),
+            (1.5, -0.1, "ior_b"),
+            (1.5, f64::INFINITY, "ior_b"),
+        ] {
+            match FresnelTable::dielectric(a, b) {
+                Err(Error::InvalidParameter {
+                    field: f, reason, ..
+                }) => {
+                    assert_eq!(f, field);
+                    assert!(reason.contains(">="), "{reason}");
+                }
+                other => panic!("({a}, {b}): {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn eval_interpolates_linearly_and_clamps() {
+        let table = FresnelTable::new(
+            vec![0.0, 30.0, 90.0],
+            vec![[0.0, 0.1, 0.2], [0.3, 0.4, 0.5], [1.0, 1.0, 1.0]],
+        )
+        .unwrap();
+        // Midpoint of the first segment: (0.15, 0.25, 0.35) to rounding (1e-15).
+        let mid = table.eval(15.0);
+        for (got, want) in mid.iter().zip([0.15, 0.25, 0.35]) {
+            assert!((got - want).abs() < 1e-15, "{mid:?}");
+        }
+        assert_eq!(table.eval(30.0), [0.3, 0.4, 0.5]);
+        assert_eq!(table.eval(-5.0), [0.0, 0.1, 0.2]);
+        assert_eq!(table.eval(f64::NAN), [0.0, 0.1, 0.2]);
+        assert_eq!(table.eval(120.0), [1.0; 3]);
+        assert_eq!(table.eval(90.0), [1.0; 3]);
+    }
+
+    #[test]
+    fn new_rejects_every_malformed_table() {
+        let ok = [0.5; 3];
+        let cases: Vec<(Vec<f64>, Vec<[f64; 3]>)> = vec![
+            (vec![0.0], vec![ok]),                               // one row
+            (vec![0.0, 90.0], vec![ok]),                         // length mismatch
+            (vec![1.0, 90.0], vec![ok, ok]),                     // first not 0
+            (vec![0.0, 89.0], vec![ok, ok]),                     // last not 90
+            (vec![0.0, 50.0, 40.0, 90.0], vec![ok, ok, ok, ok]), // not increasing
+            (vec![0.0, 50.0, 50.0, 90.0], vec![ok, ok, ok, ok]), // repeated angle
+            (vec![0.0, f64::NAN, 90.0], vec![ok, ok, ok]),       // NaN angle
+            (vec![0.0, 90.0], vec![ok, [0.5, 1.5, 0.5]]),        // above 1
+            (vec![0.0, 90.0], vec![[-0.1, 0.5, 0.5], ok]),       // below 0
+            (vec![0.0, 90.0], vec![ok, [f64::NAN, 0.5, 0.5]]),   // NaN value
+        ];
+        for (angles, rgb) in cases {
+            let shown = format!("{angles:?} {rgb:?}");
+            assert!(
+                matches!(
+                    FresnelTable::new(angles, rgb),
+                    Err(Error::InvalidParameter { .. })
+                ),
+                "{shown}"
+            );
+        }
+    }
+
+    #[test]
+    fn rgb_csv_parses_with_bom_crlf_whitespace_and_trailing_blank_lines() {
+        let text = "\u{feff}angle_deg,r,g,b\r\n 0 , 0.04,0.05 ,0.06\r\n45,0.1,0.1,0.1\r\n90,1,1,1\r\n\r\n  \n";
+        let table = FresnelTable::from_csv_str(text, "t").unwrap();
+        assert_eq!(table.angles_deg(), &[0.0, 45.0, 90.0]);
+        assert_eq!(
+            table.rgb(),
+            &[[0.04, 0.05, 0.06], [0.1, 0.1, 0.1], [1.0, 1.0, 1.0]]
+        );
+    }
+
+    #[test]
+    fn spectral_csv_goes_through_the_spectral_path() {
+        // Flat spectra map to grey exactly (flat 1 → 1 by construction, flat 0.5 to rounding).
+        let text = "angle_deg,370,500,790\n0,0.5,0.5,0.5\n90,1,1,1\n";
+        let table = FresnelTable::from_csv_str(text, "t").unwrap();
+        assert_eq!(table.rgb()[1], [1.0; 3]);
+        for c in table.rgb()[0] {
+            assert!((c - 0.5).abs() < 1e-15);
+        }
+        // A table that rises in the blue at grazing angles (the paper's observation) is bluer there.
+        let text = "angle_deg,380,500,600,780\n0,0.04,0.04,0.04,0.04\n90,0.9,0.2,0.1,0.1\n";
+        let blue = FresnelTable::from_csv_str(text, "t").unwrap().eval(90.0);
+        assert!(blue[2] > blue[1] && blue[2] > blue[0], "{blue:?}");
+    }
+
+    #[test]
+    fn every_csv_error_names_its_line() {
+        let cases: [(&str, usize, &str); 22] = [
+            ("", 1, "empty file"),
+            ("\u{feff}\n  \n", 1, "empty file"),
+            ("0,0,0,0\n90,1,1,1\n", 1, "missing header"),
+            ("angle,r,g,b\n0,0,0,0\n90,1,1,1\n", 1, "wrong header"),
+            ("angle_deg,r,g\n0,0,0\n90,1,1\n", 1, "wrong header"),
+            (
+                "angle_deg,r,g,b,\n0,0,0,0\n90,1,1,1\n",
+                1,
+                "not a wavelength",
+            ),
+            ("angle_deg,r,g,b\n", 1, "no data rows"),
+            ("angle_deg,r,g,b\n0,0,0\n90,1,1,1\n", 2, "expected 4"),
+            ("angle_deg,r,g,b\n0,0,0,0\n90,1,1,1,1\n", 3, "expected 4"),
+            ("angle_deg,r,g,b\n0,0,x,0\n90,1,1,1\n", 2, "not a number"),
+            ("angle_deg,r,g,b\n0,0,,0\n90,1,1,1\n", 2, "empty"),
+            ("angle_deg,r,g,b\n0,0,NaN,0\n90,1,1,1\n", 2, "not finite"),
+            ("angle_deg,r,g,b\n0,0,0,0\n90,inf,1,1\n", 3, "not finite"),
+            (
+                "angle_deg,r,g,b\n5,0,0,0\n90,1,1,1\n",
+                2,
+                "first angle must be 0",
+            ),
+            (
+                "angle_deg,r,g,b\n0,0,0,0\n40,0,0,0\n30,0,0,0\n90,1,1,1\n",
+                4,
+                "strictly increase",
+            ),
+            (
+                "angle_deg,r,g,b\n0,0,0,0\n80,1,1,1\n\n",
+                3,
+                "last angle must be 90",
+            ),
+            ("angle_deg,r,g,b\n0,0,0,0\n95,1,1,1\n", 3, "above 90"),
+            ("angle_deg,r,g,b\n0,0,0,0\n\n90,1,1,1\n", 3, "blank line"),
+            (
+                "angle_deg,r,g,b\n0,0,0,0\n90,1,1.2,1\n",
+                3,
+                "outside [0, 1]",
+            ),
+            (
+                "angle_deg,380,600,500,780\n0,0,0,0,0\n90,1,1,1,1\n",
+                1,
+                "strictly increase",
+            ),
+            ("angle_deg,400,780\n0,0,0\n90,1,1\n", 1, "do not cover"),
+            ("angle_deg,380,780\n0,0,-0.1\n90,1,1\n", 2, "outside [0, 1]"),
+        ];
+        for (text, line, needle) in cases {
+            let (got_line, message) = csv_error(text);
+            assert_eq!(got_line, line, "{text:?}: {message}");
+            assert!(
+                message.contains(needle),
+                "{text:?}: `{message}` lacks `{needle}`"
+            );
+        }
+    }
+
+    #[test]
+    fn csv_round_trip_is_exact() {
+        let table = FresnelTable::dielectric(1.5, 0.0045).unwrap();
+        let csv = table.to_csv();
+        assert!(csv.starts_with("angle_deg,r,g,b\n0,"));
+        assert_eq!(csv.lines().count(), 92);
+        assert_eq!(
+            FresnelTable::from_csv_str(&csv, "round trip").unwrap(),
+            table
+        );
+    }
+
+    #[test]
+    fn csv_file_errors_name_the_file() {
+        let missing = Path::new("/nonexistent/shikki/fresnel.csv");
+        assert!(matches!(
+            FresnelTable::from_csv_file(missing),
+            Err(Error::Read { .. })
+        ));
+        let path =
+            std::env::temp_dir().join(format!("shikki-fresnel-test-{}.csv", std::process::id()));
+        std::fs::write(&path, "angle_deg,r,g,b\n0,0,0,0\n").unwrap();
+        let result = FresnelTable::from_csv_file(&path);
+        std::fs::remove_file(&path).unwrap();
+        match result {
+            Err(Error::Parse { file, line, .. }) => {
+                assert_eq!(file, path.display().to_string());
+                assert_eq!(line, 2);
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+}

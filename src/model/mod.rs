@@ -1,0 +1,16 @@
+//! The lacquer model of SPEC §2–3 in plain Rust (f64): the BRDF, the material parameters and
+//! presets, the Fresnel table and the spectral path with its CIE tables.
+//!
+//! This module is the single source of truth that the CPU oracle and the GPU shaders are checked
+//! against. It has no Vulkan, no I/O beyond reading a Fresnel CSV, and no rendering; it must not
+//! depend on `gpu/`, `raster/` or `oracle/`.
+
+pub mod brdf;
+pub mod cie;
+pub mod fresnel;
+pub mod material;
+pub mod spectral;
+
+pub use brdf::{lacquer_brdf, BrdfParams};
+pub use fresnel::FresnelTable;
+pub use material::{LacquerMaterial, MATERIAL_KEYS, PRESET_NAMES};

@@ -1,0 +1,8 @@
+//! The CPU reference renderer (the "oracle") that GPU images are tested against.
+//!
+//! It ray-casts the exact analytic shapes with the lacquer model of `model/` and the camera and
+//! lights of `raster/`. It owns no model maths of its own and must never call the GPU.
+
+pub mod raycast;
+
+pub use raycast::{intersect, render, shade, AnalyticShape, OracleScene, SurfaceHit};

@@ -1,0 +1,281 @@
+//! The display transform of SPEC §1 for PNG output: radiance × 2^exposure_ev → tone curve →
+//! sRGB transfer function → 8 bits, rounded to nearest. Pure scalar functions, one definition
+//! each (the GPU never tone-maps: it hands linear radiance to `output/`). EXR output must not
+//! pass through here.
+
+use std::fmt;
+use std::str::FromStr;
+
+use crate::Error;
+
+/// The tone curve applied per channel after exposure (SPEC §1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ToneCurve {
+    /// Clamp to [0, 1]: highlights above 1 clip.
+    None,
+    /// x / (1 + x).
+    Reinhard,
+    /// Narkowicz 2015 fit of the ACES filmic curve, the default: it keeps lacquer highlights,
+    /// hundreds of times the diffuse level, from blowing out (the paper's open problem).
+    #[default]
+    Aces,
+}
+
+impl ToneCurve {
+    /// Every curve with its name as the CLI and material files spell it.
+    pub const ALL: [(ToneCurve, &'static str); 3] = [
+        (ToneCurve::None, "none"),
+        (ToneCurve::Reinhard, "reinhard"),
+        (ToneCurve::Aces, "aces"),
+    ];
+
+    /// The name `FromStr` accepts for this curve.
+    pub fn name(self) -> &'static str {
+        match self {
+            ToneCurve::None => "none",
+            ToneCurve::Reinhard => "reinhard",
+            ToneCurve::Aces => "aces",
+        }
+    }
+}
+
+impl fmt::Display for ToneCurve {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for ToneCurve {
+    type Err = Error;
+
+    /// "none", "reinhard" or "aces", ignoring ASCII case and surrounding spaces.
+    fn from_str(s: &str) -> Result<Self, Error> {
+        let wanted = s.trim();
+        ToneCurve::ALL
+            .iter()
+            .find(|(_, name)| name.eq_ignore_ascii_case(wanted))
+            .map(|(curve, _)| *curve)
+            .ok_or_else(|| {
+                Error::invalid(
+                    "tone_curve",
+                    format!("{s:?}"),
+                    "valid tone curves are none (clamp to 1), reinhard (x/(1+x)) and aces \
+                     (Narkowicz 2015 fit, the default)",
+                )
+            })
+    }
+}
+
+/// Maps exposed linear radiance `x` to display-linear [0, 1] (SPEC §1).
+///
+/// - `none`: clamp to [0, 1];
+/// - `reinhard`: x / (1 + x);
+/// - `aces`: Narkowicz 2015, x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14), clamped to [0, 1]
+///   (the fit exceeds 1 above x ≈ 7.24, the root of 0.08x² − 0.56x − 0.14, and tends to
+///   2.51/2.43).
+///
+/// Negative and NaN inputs give 0 (no light); +∞ gives each curve's limit, 1.
+pub fn tone_curve(curve: ToneCurve, x: f32) -> f32 {
+    // `max` returns the non-NaN operand, so NaN becomes 0 here.
+    let x = x.max(0.0);
+    if x == f32::INFINITY {
+        // Every formula below is ∞/∞ = NaN at infinity; all three tend to (at least) 1.
+        return 1.0;
+    }
+    let mapped = match curve {
+        ToneCurve::None => x,
+        ToneCurve::Reinhard => x / (1.0 + x),
+        ToneCurve::Aces => (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14),
+    };
+    mapped.clamp(0.0, 1.0)
+}
+
+/// The sRGB transfer function (IEC 61966-2-1 OETF): 12.92·x for x ≤ 0.0031308, else
+/// 1.055·x^(1/2.4) − 0.055. The standard includes the threshold in the linear segment.
+/// Input is clamped to [0, 1] (NaN → 0): it is only defined for display-linear values.
+pub fn srgb_encode(linear: f32) -> f32 {
+    let x = linear.max(0.0).min(1.0);
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// How linear radiance becomes 8-bit PNG values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PngSettings {
+    /// Exposure in stops: radiance is multiplied by 2^exposure_ev before the tone curve.
+    pub exposure_ev: f32,
+    pub tone_curve: ToneCurve,
+}
+
+impl Default for PngSettings {
+    /// 0 EV (radiance as rendered) and the ACES curve.
+    fn default() -> Self {
+        PngSettings {
+            exposure_ev: 0.0,
+            tone_curve: ToneCurve::Aces,
+        }
+    }
+}
+
+impl PngSettings {
+    /// Rejects a non-finite exposure, which would turn every pixel black or white.
+    pub fn validate(&self) -> crate::Result<()> {
+        if self.exposure_ev.is_finite() {
+            Ok(())
+        } else {
+            Err(Error::invalid(
+                "exposure_ev",
+                self.exposure_ev,
+                "exposure is a finite number of stops (e.g. -2 halves twice, 0 leaves radiance \
+                 unchanged)",
+            ))
+        }
+    }
+}
+
+/// radiance × 2^ev → curve → sRGB → round to nearest 8-bit. NaN or negative → 0.
+pub fn to_srgb8(radiance: f32, settings: &PngSettings) -> u8 {
+    let exposed = radiance * settings.exposure_ev.exp2();
+    let display = tone_curve(settings.tone_curve, exposed);
+    unit_to_u8(srgb_encode(display))
+}
+
+/// Rounds a [0, 1] value to the nearest of 256 levels (0.5 rounds up); out-of-range input clamps.
+pub(crate) fn unit_to_u8(value: f32) -> u8 {
+    // The clamp keeps the cast exact and NaN-free: `max` maps NaN to 0.
+    (value.max(0.0).min(1.0) * 255.0).round() as u8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// sRGB decode (the EOTF), written independently of `srgb_encode` so rounding tests can pick
+    /// radiance values whose 8-bit code is known by hand.
+    fn srgb_decode(v: f64) -> f64 {
+        if v <= 0.040_45 {
+            v / 12.92
+        } else {
+            ((v + 0.055) / 1.055).powf(2.4)
+        }
+    }
+
+    fn settings(exposure_ev: f32, tone_curve: ToneCurve) -> PngSettings {
+        PngSettings {
+            exposure_ev,
+            tone_curve,
+        }
+    }
+
+    // f32 evaluation of a handful of operations: 1e-6 absolute is ~10 ulp at these magnitudes.
+    const TOL: f32 = 1e-6;
+
+    #[test]
+    fn aces_matches_hand_computed_values() {
+        // x = 1: (2.51 + 0.03) / (2.43 + 0.59 + 0.14) = 2.54 / 3.16 = 0.803797468…
+        assert!((tone_curve(ToneCurve::Aces, 1.0) - 0.803_797_47).abs() < TOL);
+        // x = 0.5: 0.5·1.285 / (0.5·1.805 + 0.14) = 0.6425 / 1.0425 = 0.616306954…
+        assert!((tone_curve(ToneCurve::Aces, 0.5) - 0.616_306_95).abs() < TOL);
+        // x = 0: 0 / 0.14.
+        assert_eq!(tone_curve(ToneCurve::Aces, 0.0), 0.0);
+        // x = 100: 25103 / 24359.14 = 1.0305… > 1, so the clamp must bite.
+        assert_eq!(tone_curve(ToneCurve::Aces, 100.0), 1.0);
+    }
+
+    #[test]
+    fn reinhard_and_none_match_their_closed_forms() {
+        assert!((tone_curve(ToneCurve::Reinhard, 1.0) - 0.5).abs() < TOL);
+        assert!((tone_curve(ToneCurve::Reinhard, 3.0) - 0.75).abs() < TOL);
+        assert_eq!(tone_curve(ToneCurve::None, 0.25), 0.25);
+        assert_eq!(tone_curve(ToneCurve::None, 7.0), 1.0);
+    }
+
+    #[test]
+    fn curves_send_negative_and_nan_to_zero_and_infinity_to_one() {
+        for (curve, _) in ToneCurve::ALL {
+            assert_eq!(tone_curve(curve, -2.0), 0.0, "{curve}");
+            assert_eq!(tone_curve(curve, f32::NAN), 0.0, "{curve}");
+            assert_eq!(tone_curve(curve, f32::INFINITY), 1.0, "{curve}");
+        }
+    }
+
+    #[test]
+    fn srgb_encode_matches_iec_61966_2_1() {
+        // Threshold is in the linear segment: 12.92 · 0.0031308 = 0.040449936.
+        assert!((srgb_encode(0.003_130_8) - 0.040_449_936).abs() < TOL);
+        // 1.055 · 0.5^(1/2.4) − 0.055 = 1.055 · 0.7491535… − 0.055 = 0.7353569…
+        assert!((srgb_encode(0.5) - 0.735_356_9).abs() < TOL);
+        assert_eq!(srgb_encode(0.0), 0.0);
+        assert!((srgb_encode(1.0) - 1.0).abs() < TOL);
+        assert_eq!(srgb_encode(-1.0), 0.0);
+        assert_eq!(srgb_encode(f32::NAN), 0.0);
+    }
+
+    #[test]
+    fn to_srgb8_rounds_to_nearest_code() {
+        // With no curve and 0 EV, radiance = decode((k + f)/255) must give k for f = 0.4 and
+        // k + 1 for f = 0.6: 0.1 of a code is far outside f32 error, so no tolerance is needed.
+        let linear = settings(0.0, ToneCurve::None);
+        for k in [0u8, 1, 10, 57, 128, 200, 254] {
+            let below = srgb_decode((k as f64 + 0.4) / 255.0) as f32;
+            let above = srgb_decode((k as f64 + 0.6) / 255.0) as f32;
+            assert_eq!(to_srgb8(below, &linear), k, "k + 0.4 → k");
+            assert_eq!(to_srgb8(above, &linear), k + 1, "k + 0.6 → k + 1");
+        }
+        // 0.5 linear → 0.7353569 · 255 = 187.516 → 188 (truncation would give 187).
+        assert_eq!(to_srgb8(0.5, &linear), 188);
+        assert_eq!(to_srgb8(1.0, &linear), 255);
+        assert_eq!(to_srgb8(1000.0, &linear), 255);
+    }
+
+    #[test]
+    fn to_srgb8_sends_nan_and_negative_to_zero() {
+        for (curve, _) in ToneCurve::ALL {
+            assert_eq!(to_srgb8(f32::NAN, &settings(0.0, curve)), 0);
+            assert_eq!(to_srgb8(-5.0, &settings(0.0, curve)), 0);
+            assert_eq!(to_srgb8(f32::INFINITY, &settings(0.0, curve)), 255);
+        }
+    }
+
+    #[test]
+    fn exposure_multiplies_radiance_by_two_to_the_ev() {
+        // +2 EV on 0.125 is 0.5 → 188 (see above); −1 EV on 1.0 is 0.5 too.
+        assert_eq!(to_srgb8(0.125, &settings(2.0, ToneCurve::None)), 188);
+        assert_eq!(to_srgb8(1.0, &settings(-1.0, ToneCurve::None)), 188);
+        // Reinhard after +1 EV on 0.5: x = 1 → 0.5 display-linear → 188.
+        assert_eq!(to_srgb8(0.5, &settings(1.0, ToneCurve::Reinhard)), 188);
+        // ACES at 0 EV on 1.0: 0.8037975 → sRGB 1.055·0.8037975^(1/2.4) − 0.055 = 0.90820… →
+        // 231.59 → 232.
+        assert_eq!(to_srgb8(1.0, &PngSettings::default()), 232);
+    }
+
+    #[test]
+    fn default_settings_are_zero_ev_and_aces() {
+        assert_eq!(PngSettings::default(), settings(0.0, ToneCurve::Aces));
+        assert_eq!(ToneCurve::default(), ToneCurve::Aces);
+    }
+
+    #[test]
+    fn non_finite_exposure_is_rejected() {
+        assert!(settings(f32::NAN, ToneCurve::Aces).validate().is_err());
+        assert!(settings(f32::INFINITY, ToneCurve::Aces).validate().is_err());
+        assert!(settings(-3.5, ToneCurve::Aces).validate().is_ok());
+    }
+
+    #[test]
+    fn tone_curve_names_parse_and_errors_list_the_valid_names() {
+        assert_eq!("none".parse::<ToneCurve>().unwrap(), ToneCurve::None);
+        assert_eq!("Reinhard".parse::<ToneCurve>().unwrap(), ToneCurve::Reinhard);
+        assert_eq!(" ACES ".parse::<ToneCurve>().unwrap(), ToneCurve::Aces);
+        let message = "filmic".parse::<ToneCurve>().unwrap_err().to_string();
+        for name in ["filmic", "none", "reinhard", "aces"] {
+            assert!(message.contains(name), "{message}");
+        }
+        for (curve, name) in ToneCurve::ALL {
+            assert_eq!(curve.to_string(), name);
+        }
+    }
+}

@@ -1,0 +1,14 @@
+//! Rasterisation inputs shared by the GPU draw and the CPU oracle: the camera (SPEC §1), the
+//! punctual lights (SPEC §4) and the built-in meshes (SPEC §5), plus the GPU draw itself.
+//!
+//! camera, lights and mesh are plain Rust with no Vulkan; `draw` is the only part that records
+//! GPU work. Nothing here knows the lacquer model (that is `model/`).
+
+pub mod camera;
+pub mod draw;
+pub mod lights;
+pub mod mesh;
+
+pub use camera::Camera;
+pub use lights::{default_lights, Light, MAX_LIGHTS};
+pub use mesh::{BuiltinMesh, Mesh};

@@ -1,0 +1,101 @@
+//! The host side of the shaders' parameter blocks: the one place that packs the lacquer model
+//! (SPEC §2–3) into the layouts `shaders/common/*.glsl` declare. The raster draw and the compute
+//! BRDF evaluator both use it, so a number the shader needs is packed once, not retyped.
+
+use crate::model::{BrdfParams, FresnelTable};
+use crate::raster::camera::Camera;
+use crate::raster::lights::{Light, MAX_LIGHTS};
+use bytemuck::{Pod, Zeroable};
+
+/// Fresnel table knots as the GLSL `vec4 fresnel_knots[]`: (angle_deg, r, g, b).
+pub fn fresnel_knots(table: &FresnelTable) -> Vec<[f32; 4]> {
+    table
+        .angles_deg()
+        .iter()
+        .zip(table.rgb())
+        .map(|(&angle, rgb)| [angle as f32, rgb[0] as f32, rgb[1] as f32, rgb[2] as f32])
+        .collect()
+}
+
+/// (m, a, b, g(r)) and (k_d, knot count): the two vec4s `LacquerParams` is unpacked from.
+pub fn material_vec4s(brdf: &BrdfParams, fresnel: &FresnelTable) -> [[f32; 4]; 2] {
+    [
+        [
+            brdf.beckmann_m as f32,
+            brdf.diffuse_a as f32,
+            brdf.diffuse_b as f32,
+            brdf.lacquer_g as f32,
+        ],
+        [
+            brdf.albedo[0] as f32,
+            brdf.albedo[1] as f32,
+            brdf.albedo[2] as f32,
+            // Exact as f32: tables are far shorter than 2^24 knots.
+            fresnel.angles_deg().len() as f32,
+        ],
+    ]
+}
+
+/// `Frame` in shaders/common/frame.glsl (std140; every member is a multiple of 16 bytes, so the
+/// C layout is the std140 layout).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct FrameUniforms {
+    pub view_projection: [f32; 16],
+    pub eye: [f32; 4],
+    pub material: [f32; 4],
+    pub albedo_count: [f32; 4],
+    pub light_count: [i32; 4],
+    pub light_vector: [[f32; 4]; MAX_LIGHTS],
+    pub light_color: [[f32; 4]; MAX_LIGHTS],
+}
+
+impl FrameUniforms {
+    /// Packs one draw's camera, lights and material. `lights.len()` must be ≤ MAX_LIGHTS (checked
+    /// by the renderer before this is called; extra lights are ignored here).
+    pub fn new(
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        scene_radius: f64,
+        lights: &[Light],
+        brdf: &BrdfParams,
+        fresnel: &FresnelTable,
+    ) -> Self {
+        let [material, albedo_count] = material_vec4s(brdf, fresnel);
+        let mut frame = FrameUniforms {
+            view_projection: camera
+                .view_projection(width, height, scene_radius)
+                .to_cols_array(),
+            eye: [
+                camera.eye.x as f32,
+                camera.eye.y as f32,
+                camera.eye.z as f32,
+                1.0,
+            ],
+            material,
+            albedo_count,
+            light_count: [lights.len().min(MAX_LIGHTS) as i32, 0, 0, 0],
+            light_vector: [[0.0; 4]; MAX_LIGHTS],
+            light_color: [[0.0; 4]; MAX_LIGHTS],
+        };
+        for (i, light) in lights.iter().take(MAX_LIGHTS).enumerate() {
+            let (vector, color) = match *light {
+                Light::Directional {
+                    to_light,
+                    irradiance,
+                } => {
+                    let d = to_light.normalize();
+                    ([d.x, d.y, d.z, 0.0], irradiance)
+                }
+                Light::Point {
+                    position,
+                    intensity,
+                } => ([position.x, position.y, position.z, 1.0], intensity),
+            };
+            frame.light_vector[i] = vector.map(|v| v as f32);
+            frame.light_color[i] = [color.x as f32, color.y as f32, color.z as f32, 0.0];
+        }
+        frame
+    }
+}
