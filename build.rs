@@ -108,9 +108,11 @@ fn compile(
     let source = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}\n", path.display()))?;
     let mut options = shaderc::CompileOptions::new()
         .ok_or_else(|| "shaderc: cannot create compile options".to_string())?;
+    // Vulkan 1.2 / SPIR-V 1.5: targeting 1.3 makes glslang emit LocalSizeId, which needs the
+    // maintenance4 feature (VUID-RuntimeSpirv-LocalSizeId-06434); nothing here needs SPIR-V 1.6.
     options.set_target_env(
         shaderc::TargetEnv::Vulkan,
-        shaderc::EnvVersion::Vulkan1_3 as u32,
+        shaderc::EnvVersion::Vulkan1_2 as u32,
     );
     options.set_source_language(shaderc::SourceLanguage::GLSL);
     // Full optimisation can reassociate arithmetic; the oracle comparison wants the BRDF exactly as

@@ -11,6 +11,7 @@ layout(local_size_x = 64) in;
 layout(std140, set = 0, binding = 0) uniform Params {
     vec4 material;      // m, a, b, g(r)
     vec4 albedo_count;  // k_d.rgb, fresnel knot count (as float, exact below 2^24)
+    vec4 material_lo;   // what rounding a and b to f32 lost: (a_lo, b_lo, 0, 0)
     uvec4 row_count;    // x: rows
 } params;
 
@@ -27,6 +28,8 @@ void main() {
     p.beckmann_m = params.material.x;
     p.diffuse_a = params.material.y;
     p.diffuse_b = params.material.z;
+    p.diffuse_a_lo = params.material_lo.x;
+    p.diffuse_b_lo = params.material_lo.y;
     p.lacquer_g = params.material.w;
     p.albedo = params.albedo_count.xyz;
     p.fresnel_count = int(params.albedo_count.w);

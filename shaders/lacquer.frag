@@ -16,6 +16,8 @@ void main() {
     p.beckmann_m = frame.material.x;
     p.diffuse_a = frame.material.y;
     p.diffuse_b = frame.material.z;
+    p.diffuse_a_lo = frame.material_lo.x;
+    p.diffuse_b_lo = frame.material_lo.y;
     p.lacquer_g = frame.material.w;
     p.albedo = frame.albedo_count.xyz;
     p.fresnel_count = int(frame.albedo_count.w);

@@ -17,15 +17,14 @@ pub fn fresnel_knots(table: &FresnelTable) -> Vec<[f32; 4]> {
         .collect()
 }
 
-/// (m, a, b, g(r)) and (k_d, knot count): the two vec4s `LacquerParams` is unpacked from.
-pub fn material_vec4s(brdf: &BrdfParams, fresnel: &FresnelTable) -> [[f32; 4]; 2] {
+/// (m, a, b, g(r)), (k_d, knot count) and (a_lo, b_lo, 0, 0): the three vec4s `LacquerParams`
+/// is unpacked from. a and b travel as f32 pairs (hi + lo) because the shader evaluates a + b·nv
+/// in compensated arithmetic (see lacquer_brdf.glsl).
+pub fn material_vec4s(brdf: &BrdfParams, fresnel: &FresnelTable) -> [[f32; 4]; 3] {
+    let (a, a_lo) = split_f64(brdf.diffuse_a);
+    let (b, b_lo) = split_f64(brdf.diffuse_b);
     [
-        [
-            brdf.beckmann_m as f32,
-            brdf.diffuse_a as f32,
-            brdf.diffuse_b as f32,
-            brdf.lacquer_g as f32,
-        ],
+        [brdf.beckmann_m as f32, a, b, brdf.lacquer_g as f32],
         [
             brdf.albedo[0] as f32,
             brdf.albedo[1] as f32,
@@ -33,7 +32,14 @@ pub fn material_vec4s(brdf: &BrdfParams, fresnel: &FresnelTable) -> [[f32; 4]; 2
             // Exact as f32: tables are far shorter than 2^24 knots.
             fresnel.angles_deg().len() as f32,
         ],
+        [a_lo, b_lo, 0.0, 0.0],
     ]
+}
+
+/// x ≈ hi + lo with hi = x rounded to f32 and lo the f32 nearest to the remainder.
+fn split_f64(x: f64) -> (f32, f32) {
+    let hi = x as f32;
+    (hi, (x - f64::from(hi)) as f32)
 }
 
 /// `Frame` in shaders/common/frame.glsl (std140; every member is a multiple of 16 bytes, so the
@@ -45,6 +51,7 @@ pub struct FrameUniforms {
     pub eye: [f32; 4],
     pub material: [f32; 4],
     pub albedo_count: [f32; 4],
+    pub material_lo: [f32; 4],
     pub light_count: [i32; 4],
     pub light_vector: [[f32; 4]; MAX_LIGHTS],
     pub light_color: [[f32; 4]; MAX_LIGHTS],
@@ -62,7 +69,7 @@ impl FrameUniforms {
         brdf: &BrdfParams,
         fresnel: &FresnelTable,
     ) -> Self {
-        let [material, albedo_count] = material_vec4s(brdf, fresnel);
+        let [material, albedo_count, material_lo] = material_vec4s(brdf, fresnel);
         let mut frame = FrameUniforms {
             view_projection: camera
                 .view_projection(width, height, scene_radius)
@@ -75,6 +82,7 @@ impl FrameUniforms {
             ],
             material,
             albedo_count,
+            material_lo,
             light_count: [lights.len().min(MAX_LIGHTS) as i32, 0, 0, 0],
             light_vector: [[0.0; 4]; MAX_LIGHTS],
             light_color: [[0.0; 4]; MAX_LIGHTS],

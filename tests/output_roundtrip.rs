@@ -61,7 +61,11 @@ fn exr_first_row_in_the_file_is_the_top_row_and_values_are_exact() {
     // OpenEXR: y grows downward and the data window's first scan line (y = 0 here) is the top.
     assert_eq!(header.attributes.layer_position, exr::math::Vec2(0, 0));
     let pixels = &header.channel_data.pixels;
-    assert_eq!(&pixels[0..3], &[RED; 3], "file row 0 must be the image's top (red) row");
+    assert_eq!(
+        &pixels[0..3],
+        &[RED; 3],
+        "file row 0 must be the image's top (red) row"
+    );
     assert_eq!(&pixels[3..5], &[BLUE; 2]);
     // No exposure, no tone curve, alpha kept: the HDR value and coverage survive bit for bit.
     assert_eq!(pixels[5], [3.25, 0.125, 0.0, 0.5]);
@@ -99,7 +103,11 @@ fn identical_inputs_give_bit_identical_files() {
     for y in 0..48 {
         for x in 0..64 {
             let t = (x * 48 + y) as f32;
-            image.set(x, y, [(t * 0.013).sin().abs() * 300.0, t / 3072.0, 0.02, 1.0]);
+            image.set(
+                x,
+                y,
+                [(t * 0.013).sin().abs() * 300.0, t / 3072.0, 0.02, 1.0],
+            );
         }
     }
     let settings = PngSettings {
@@ -111,7 +119,11 @@ fn identical_inputs_give_bit_identical_files() {
         let second = dir.join(format!("second.{extension}"));
         write_image(&first, &image, &settings).unwrap();
         write_image(&second, &image.clone(), &settings).unwrap();
-        assert_eq!(fs::read(&first).unwrap(), fs::read(&second).unwrap(), "{extension}");
+        assert_eq!(
+            fs::read(&first).unwrap(),
+            fs::read(&second).unwrap(),
+            "{extension}"
+        );
     }
 }
 
@@ -124,7 +136,11 @@ fn writing_into_a_missing_directory_fails_clearly_and_leaves_no_file() {
         .to_string();
     assert!(message.contains("out.png"), "{message}");
     assert!(message.contains("does not exist"), "{message}");
-    assert_eq!(fs::read_dir(&dir).unwrap().count(), 0, "no temp file either");
+    assert_eq!(
+        fs::read_dir(&dir).unwrap().count(),
+        0,
+        "no temp file either"
+    );
 }
 
 #[test]
@@ -134,10 +150,23 @@ fn preflight_rejects_jpg_and_accepts_png_and_exr() {
         .unwrap_err()
         .to_string();
     assert!(message.contains("render.jpg"), "{message}");
-    assert!(message.contains(".png") && message.contains(".exr"), "{message}");
-    assert_eq!(preflight_output(&dir.join("r.png")).unwrap(), OutputFormat::Png);
-    assert_eq!(preflight_output(&dir.join("r.exr")).unwrap(), OutputFormat::Exr);
-    assert_eq!(fs::read_dir(&dir).unwrap().count(), 0, "preflight leaves nothing");
+    assert!(
+        message.contains(".png") && message.contains(".exr"),
+        "{message}"
+    );
+    assert_eq!(
+        preflight_output(&dir.join("r.png")).unwrap(),
+        OutputFormat::Png
+    );
+    assert_eq!(
+        preflight_output(&dir.join("r.exr")).unwrap(),
+        OutputFormat::Exr
+    );
+    assert_eq!(
+        fs::read_dir(&dir).unwrap().count(),
+        0,
+        "preflight leaves nothing"
+    );
 }
 
 #[test]

@@ -20,12 +20,63 @@ layout(std430, set = FRESNEL_SET, binding = FRESNEL_BINDING) readonly buffer Fre
 
 struct LacquerParams {
     float beckmann_m;
-    float diffuse_a;
-    float diffuse_b;
+    float diffuse_a;    // a, rounded to f32 ...
+    float diffuse_b;    // b, rounded to f32 ...
+    float diffuse_a_lo; // ... and what the rounding lost (a = diffuse_a + diffuse_a_lo)
+    float diffuse_b_lo;
     float lacquer_g;   // g(r), evaluated on the host
     vec3 albedo;       // k_d
     int fresnel_count; // number of knots
 };
+
+// --- Error-free transformations (Knuth TwoSum, Dekker/Veltkamp TwoProduct) -------------------
+// Why: the smooth preset has f(nv) = a + b·nv with a < 0, which crosses zero at nv = -a/b ≈ 0.029.
+// Near that crossing, fp32 rounding of nv (~1e-8) becomes a large relative error of the diffuse
+// term. Carrying nv and a + b·nv as unevaluated float pairs (hi + lo, ~46 bits) removes it.
+// `precise` forbids the compiler from re-associating or contracting these operations, which would
+// silently cancel the error terms. No fma: Vulkan lets fma be unfused, Veltkamp's split is exact.
+
+vec2 two_sum(float a, float b) {
+    precise float s = a + b;
+    precise float bb = s - a;
+    precise float err = (a - (s - bb)) + (b - bb);
+    return vec2(s, err);
+}
+
+vec2 veltkamp_split(float a) {
+    precise float c = 4097.0 * a; // 2^12 + 1 splits a 24-bit significand into 12 + 12 bits
+    precise float hi = c - (c - a);
+    precise float lo = a - hi;
+    return vec2(hi, lo);
+}
+
+vec2 two_prod(float a, float b) {
+    precise float p = a * b;
+    vec2 sa = veltkamp_split(a);
+    vec2 sb = veltkamp_split(b);
+    precise float err = ((sa.x * sb.x - p) + sa.x * sb.y + sa.y * sb.x) + sa.y * sb.y;
+    return vec2(p, err);
+}
+
+// dot(a, b) as hi + lo, exact up to ~2^-46 relative to the largest product.
+vec2 dot_compensated(vec3 a, vec3 b) {
+    vec2 px = two_prod(a.x, b.x);
+    vec2 py = two_prod(a.y, b.y);
+    vec2 pz = two_prod(a.z, b.z);
+    vec2 s1 = two_sum(px.x, py.x);
+    vec2 s2 = two_sum(s1.x, pz.x);
+    precise float lo = (px.y + py.y) + (pz.y + s1.y) + s2.y;
+    return vec2(s2.x, lo);
+}
+
+// f(nv) = a + b·nv from the compensated nv, rounded once at the end.
+float view_factor(LacquerParams p, vec2 nv) {
+    vec2 bn = two_prod(p.diffuse_b, nv.x);
+    vec2 s = two_sum(p.diffuse_a, bn.x);
+    precise float tail = s.y + bn.y + p.diffuse_a_lo + p.diffuse_b * nv.y + p.diffuse_b_lo * nv.x;
+    precise float f = s.x + tail;
+    return f;
+}
 
 // F(θ): linear interpolation in the table; θ in degrees, clamped to [0, 90].
 vec3 fresnel_table(float theta_deg, int count) {
@@ -48,9 +99,21 @@ vec3 fresnel_table(float theta_deg, int count) {
     return mix(k0.yzw, k1.yzw, t);
 }
 
-// Angle in degrees of a cosine, for the Fresnel lookup.
+// Angle in degrees of a cosine in [0, 1], for the Fresnel lookup. GLSL's acos has no precision
+// guarantee in Vulkan (it inherits atan's 4096 ulp bound) and lavapipe's is off by ~1e-4 rad, which
+// the steep part of the Fresnel curve turns into a visible error; Abramowitz & Stegun 4.4.46,
+// acos x = sqrt(1 - x)·Σ a_i x^i with |error| ≤ 2e-8 on [0, 1], is exact to fp32 rounding.
 float angle_deg_of_cos(float c) {
-    return degrees(acos(clamp(c, 0.0, 1.0)));
+    float x = clamp(c, 0.0, 1.0);
+    float p = -0.0012624911;
+    p = p * x + 0.0066700901;
+    p = p * x - 0.0170881256;
+    p = p * x + 0.0308918810;
+    p = p * x - 0.0501743046;
+    p = p * x + 0.0889789874;
+    p = p * x - 0.2145988016;
+    p = p * x + 1.5707963050;
+    return degrees(sqrt(1.0 - x) * p);
 }
 
 // Normalised Beckmann D. exp((nh² - 1)/(m² nh²)) is written with tan²α = |N×H|²/nh²: when nh → 1,
@@ -74,21 +137,22 @@ float cook_torrance_g(float nh, float nv, float nl, float vh) {
     return min(1.0, min(2.0 * nh * nv / vh, 2.0 * nh * nl / vh));
 }
 
-// k_d · max(a + b·nv, 0) · g(r) / π: the paper's view-dependent diffuse term.
-vec3 view_dependent_diffuse(LacquerParams p, float nv) {
-    return p.albedo * (max(p.diffuse_a + p.diffuse_b * nv, 0.0) * p.lacquer_g / PI);
+// k_d · max(a + b·nv, 0) · g(r) / π: the paper's view-dependent diffuse term. nv as hi + lo.
+vec3 view_dependent_diffuse(LacquerParams p, vec2 nv) {
+    return p.albedo * (max(view_factor(p, nv), 0.0) * p.lacquer_g / PI);
 }
 
 // f_r(N, V, L) [1/sr]; n, v, l unit vectors.
 vec3 lacquer_brdf(LacquerParams p, vec3 n, vec3 v, vec3 l) {
-    float nv = dot(n, v);
+    vec2 nv2 = dot_compensated(n, v);
+    float nv = nv2.x + nv2.y;
     float nl = dot(n, l);
     if (nv <= 0.0 || nl <= 0.0) {
         return vec3(0.0);
     }
     vec3 half_sum = v + l;
     float half_len = length(half_sum);
-    vec3 f_diff = view_dependent_diffuse(p, nv);
+    vec3 f_diff = view_dependent_diffuse(p, nv2);
     if (half_len <= 0.0) {
         return f_diff;
     }

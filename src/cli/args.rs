@@ -7,7 +7,11 @@ use glam::DVec3;
 use std::path::PathBuf;
 
 #[derive(Debug, Parser)]
-#[command(name = "shikki", version, about = "Render Japanese lacquer ware (urushi) headless on Vulkan")]
+#[command(
+    name = "shikki",
+    version,
+    about = "Render Japanese lacquer ware (urushi) headless on Vulkan"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,

@@ -75,7 +75,22 @@ fn lights_from(specs: &[String]) -> Result<Vec<Light>> {
     specs.iter().map(|s| Light::parse(s)).collect()
 }
 
+/// A failed render never leaves a file at the output path: a file there from an earlier run would
+/// pass for this run's result (batch users check for existence), so it is removed, and the error
+/// says so.
 fn render(args: RenderArgs) -> Result<()> {
+    let output_path = args.output.clone();
+    render_image(args).inspect_err(|_| {
+        if let Ok(true) = output::atomic::discard_stale_output(&output_path) {
+            eprintln!(
+                "removed {} from an earlier run: it is not this run's output",
+                output_path.display()
+            );
+        }
+    })
+}
+
+fn render_image(args: RenderArgs) -> Result<()> {
     let material = build_material(&args.material)?;
     let brdf = material.brdf_params()?;
     let fresnel = material.fresnel_table()?;
@@ -147,10 +162,7 @@ fn brdf(args: BrdfArgs) -> Result<()> {
             let evaluator = BrdfEvaluator::new(&gpu)?;
             let values = evaluator.evaluate(&gpu, &params, &fresnel, &rows)?;
             gpu.check_validation()?;
-            values
-                .iter()
-                .map(|v| v.map(f64::from))
-                .collect()
+            values.iter().map(|v| v.map(f64::from)).collect()
         }
     };
     let mut out = String::with_capacity(rows.len() * 200);
@@ -189,14 +201,22 @@ fn info() -> Result<()> {
         i.driver_name,
         i.driver_info,
         i.api_version,
-        if gpu.validation_enabled() { "on" } else { "off (SHIKKI_VALIDATION=1 to enable)" },
+        if gpu.validation_enabled() {
+            "on"
+        } else {
+            "off (SHIKKI_VALIDATION=1 to enable)"
+        },
         i.max_image_dimension_2d,
         i.max_image_dimension_cube,
         i.max_compute_workgroup_invocations,
         i.max_storage_buffer_range,
         i.max_uniform_buffer_range,
         i.framebuffer_color_sample_counts,
-        if i.timestamp_compute_and_graphics { "yes" } else { "no" },
+        if i.timestamp_compute_and_graphics {
+            "yes"
+        } else {
+            "no"
+        },
         i.timestamp_period_ns,
     );
     write_stdout(&text)
@@ -205,7 +225,10 @@ fn info() -> Result<()> {
 /// Writes to stdout; a closed pipe (`shikki brdf … | head`) is not an error worth a panic.
 fn write_stdout(text: &str) -> Result<()> {
     let mut stdout = std::io::stdout().lock();
-    match stdout.write_all(text.as_bytes()).and_then(|()| stdout.flush()) {
+    match stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+    {
         Ok(()) => Ok(()),
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
         Err(e) => Err(Error::Write {

@@ -12,8 +12,18 @@ pub fn parse_directions(text: &str, source: &str) -> Result<Vec<[DVec3; 3]>> {
     let header = lines
         .by_ref()
         .find(|(_, l)| !l.trim().is_empty())
-        .ok_or_else(|| Error::parse(source, 1, format!("empty file; expected the header {HEADER}")))?;
-    let got: Vec<String> = header.1.split(',').map(|s| s.trim().to_lowercase()).collect();
+        .ok_or_else(|| {
+            Error::parse(
+                source,
+                1,
+                format!("empty file; expected the header {HEADER}"),
+            )
+        })?;
+    let got: Vec<String> = header
+        .1
+        .split(',')
+        .map(|s| s.trim().to_lowercase())
+        .collect();
     if got.join(",") != HEADER {
         return Err(Error::parse(
             source,
@@ -39,7 +49,11 @@ pub fn parse_directions(text: &str, source: &str) -> Result<Vec<[DVec3; 3]>> {
         for (i, (slot, cell)) in values.iter_mut().zip(&cells).enumerate() {
             let name = HEADER.split(',').nth(i).unwrap_or("?");
             let x: f64 = cell.parse().map_err(|_| {
-                Error::parse(source, line_no, format!("{name} = {cell:?} is not a number"))
+                Error::parse(
+                    source,
+                    line_no,
+                    format!("{name} = {cell:?} is not a number"),
+                )
             })?;
             if !x.is_finite() {
                 return Err(Error::parse(
@@ -84,7 +98,8 @@ mod tests {
 
     #[test]
     fn parses_and_normalises_rows() {
-        let rows = parse_directions("nx,ny,nz,vx,vy,vz,lx,ly,lz\n0,0,2,0,1,1,1,0,1\n", "t").unwrap();
+        let rows =
+            parse_directions("nx,ny,nz,vx,vy,vz,lx,ly,lz\n0,0,2,0,1,1,1,0,1\n", "t").unwrap();
         assert_eq!(rows.len(), 1);
         assert!((rows[0][1].length() - 1.0).abs() < 1e-15);
         assert!((rows[0][1].y - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-15);
@@ -92,9 +107,12 @@ mod tests {
 
     #[test]
     fn errors_name_the_line() {
-        let err = parse_directions("nx,ny,nz,vx,vy,vz,lx,ly,lz\n0,0,1,0,0,1,0,0,1\n0,0,1,x,0,1,0,0,1\n", "d.csv")
-            .unwrap_err()
-            .to_string();
+        let err = parse_directions(
+            "nx,ny,nz,vx,vy,vz,lx,ly,lz\n0,0,1,0,0,1,0,0,1\n0,0,1,x,0,1,0,0,1\n",
+            "d.csv",
+        )
+        .unwrap_err()
+        .to_string();
         assert!(err.contains("d.csv:3") && err.contains("vx"), "{err}");
         let err = parse_directions("a,b\n", "d.csv").unwrap_err().to_string();
         assert!(err.contains("d.csv:1") && err.contains("header"), "{err}");

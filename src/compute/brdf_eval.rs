@@ -22,6 +22,7 @@ const ROWS_PER_BATCH: usize = 1 << 20;
 struct EvalParams {
     material: [f32; 4],
     albedo_count: [f32; 4],
+    material_lo: [f32; 4],
     row_count: [u32; 4],
 }
 
@@ -74,10 +75,11 @@ impl BrdfEvaluator {
         if rows == 0 {
             return Ok(Vec::new());
         }
-        let [material, albedo_count] = shading::material_vec4s(brdf, fresnel);
+        let [material, albedo_count, material_lo] = shading::material_vec4s(brdf, fresnel);
         let params = EvalParams {
             material,
             albedo_count,
+            material_lo,
             row_count: [rows as u32, 0, 0, 0],
         };
         let knots = shading::fresnel_knots(fresnel);
@@ -109,10 +111,8 @@ impl BrdfEvaluator {
             BufferUsage::STORAGE,
         ))?;
         dirs_buf.write(&directions)?;
-        let values_buf = gpu.create_buffer(BufferDesc::readback(
-            "brdf_eval values",
-            (rows * 16) as u64,
-        ))?;
+        let values_buf =
+            gpu.create_buffer(BufferDesc::readback("brdf_eval values", (rows * 16) as u64))?;
         let set = gpu.create_descriptor_set(
             self.pipeline.layout(),
             &[

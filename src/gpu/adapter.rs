@@ -65,13 +65,16 @@ pub(crate) fn choose_adapter(
             });
     }
     candidates.sort_by_key(|c| type_rank(&c.info.device_type));
-    candidates.into_iter().next().ok_or_else(|| GpuError::NoDevice {
-        detail: if rejected.is_empty() {
-            String::new()
-        } else {
-            format!(" (unsuitable: {})", rejected.join("; "))
-        },
-    })
+    candidates
+        .into_iter()
+        .next()
+        .ok_or_else(|| GpuError::NoDevice {
+            detail: if rejected.is_empty() {
+                String::new()
+            } else {
+                format!(" (unsuitable: {})", rejected.join("; "))
+            },
+        })
 }
 
 fn type_rank(device_type: &str) -> u8 {

@@ -48,8 +48,7 @@ impl Recorder<'_> {
             .src_access_mask(src_access)
             .dst_stage_mask(dst_stage)
             .dst_access_mask(dst_access);
-        let info =
-            vk::DependencyInfo::default().memory_barriers(std::slice::from_ref(&barrier));
+        let info = vk::DependencyInfo::default().memory_barriers(std::slice::from_ref(&barrier));
         // SAFETY: recording into a command buffer in the recording state.
         unsafe { self.device.cmd_pipeline_barrier2(self.cmd, &info) };
     }
@@ -168,8 +167,12 @@ impl Recorder<'_> {
     pub fn bind_mesh_buffers(&mut self, vertices: &Buffer, indices: &Buffer) {
         // SAFETY: recording; buffers are live for the submit.
         unsafe {
-            self.device
-                .cmd_bind_vertex_buffers(self.cmd, 0, std::slice::from_ref(&vertices.raw), &[0]);
+            self.device.cmd_bind_vertex_buffers(
+                self.cmd,
+                0,
+                std::slice::from_ref(&vertices.raw),
+                &[0],
+            );
             self.device
                 .cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32);
         }
@@ -177,7 +180,10 @@ impl Recorder<'_> {
 
     pub fn draw_indexed(&mut self, index_count: u32) {
         // SAFETY: recording inside a rendering pass with a pipeline and buffers bound.
-        unsafe { self.device.cmd_draw_indexed(self.cmd, index_count, 1, 0, 0, 0) };
+        unsafe {
+            self.device
+                .cmd_draw_indexed(self.cmd, index_count, 1, 0, 0, 0)
+        };
     }
 
     pub fn bind_compute(&mut self, pipeline: &ComputePipeline, set: &DescriptorSet) {

@@ -32,7 +32,9 @@ impl ContextOptions {
     pub fn from_env() -> Self {
         Self {
             validation: std::env::var("SHIKKI_VALIDATION").is_ok_and(|v| v == "1"),
-            device_name: std::env::var("SHIKKI_DEVICE").ok().filter(|s| !s.is_empty()),
+            device_name: std::env::var("SHIKKI_DEVICE")
+                .ok()
+                .filter(|s| !s.is_empty()),
         }
     }
 }
@@ -182,26 +184,25 @@ impl GpuContext {
         let submit =
             vk::SubmitInfo2::default().command_buffer_infos(std::slice::from_ref(&cmd_info));
         // SAFETY: queue access is serialised by the submission mutex held by our caller.
-        let waited = unsafe {
-            device.queue_submit2(submission.queue, std::slice::from_ref(&submit), fence)
-        }
-        .during("vkQueueSubmit2")
-        .and_then(|()| {
-            // SAFETY: the fence belongs to this device.
-            unsafe {
-                device.wait_for_fences(
-                    std::slice::from_ref(&fence),
-                    true,
-                    SUBMIT_TIMEOUT_SECONDS * 1_000_000_000,
-                )
-            }
-            .map_err(|result| match result {
-                vk::Result::TIMEOUT => GpuError::Timeout {
-                    seconds: SUBMIT_TIMEOUT_SECONDS,
-                },
-                other => super::error::from_vk("vkWaitForFences", other),
-            })
-        });
+        let waited =
+            unsafe { device.queue_submit2(submission.queue, std::slice::from_ref(&submit), fence) }
+                .during("vkQueueSubmit2")
+                .and_then(|()| {
+                    // SAFETY: the fence belongs to this device.
+                    unsafe {
+                        device.wait_for_fences(
+                            std::slice::from_ref(&fence),
+                            true,
+                            SUBMIT_TIMEOUT_SECONDS * 1_000_000_000,
+                        )
+                    }
+                    .map_err(|result| match result {
+                        vk::Result::TIMEOUT => GpuError::Timeout {
+                            seconds: SUBMIT_TIMEOUT_SECONDS,
+                        },
+                        other => super::error::from_vk("vkWaitForFences", other),
+                    })
+                });
         if waited.is_ok() {
             // SAFETY: the fence has signalled, so nothing waits on it.
             unsafe { device.destroy_fence(fence, None) };

@@ -2,7 +2,7 @@
 //! allocator. Resources hold an `Arc<DeviceShared>`, so the device outlives every buffer, image and
 //! pipeline made from it, and `Drop` tears down in reverse creation order.
 
-use super::adapter::{choose_adapter, AdapterInfo};
+use super::adapter::{choose_adapter, AdapterInfo, ChosenAdapter};
 use super::debug::ValidationLog;
 use super::error::{GpuError, VkResultExt};
 use super::instance::{create_instance, InstanceParts};
@@ -26,77 +26,21 @@ impl DeviceShared {
         let log = ValidationLog::default();
         let instance = create_instance(validation, &log)?;
         // `log` stays alive here until the instance (and its messenger) is gone on every path.
-        match Self::create_on(instance, validation, device_name, log.clone()) {
-            Ok(shared) => Ok(shared),
-            Err((instance, err)) => {
+        match create_device(&instance, device_name) {
+            Ok((device, adapter, allocator)) => Ok(DeviceShared {
+                device,
+                queue_family: adapter.queue_family,
+                info: adapter.info,
+                log,
+                validation,
+                allocator: ManuallyDrop::new(Mutex::new(allocator)),
+                instance,
+            }),
+            Err(err) => {
                 destroy_instance(&instance);
                 Err(err)
             }
         }
-    }
-
-    fn create_on(
-        instance: InstanceParts,
-        validation: bool,
-        device_name: Option<&str>,
-        log: ValidationLog,
-    ) -> Result<Self, (InstanceParts, GpuError)> {
-        let adapter = match choose_adapter(&instance.instance, device_name) {
-            Ok(a) => a,
-            Err(e) => return Err((instance, e)),
-        };
-        let priorities = [1.0f32];
-        let queue_info = vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(adapter.queue_family)
-            .queue_priorities(&priorities);
-        let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
-            .dynamic_rendering(true)
-            .synchronization2(true);
-        let create_info = vk::DeviceCreateInfo::default()
-            .queue_create_infos(std::slice::from_ref(&queue_info))
-            .push_next(&mut features13);
-        // SAFETY: the physical device comes from this instance; create_info lives until return.
-        let device = match unsafe {
-            instance
-                .instance
-                .create_device(adapter.physical_device, &create_info, None)
-        }
-        .during("vkCreateDevice")
-        {
-            Ok(d) => d,
-            Err(e) => return Err((instance, e)),
-        };
-        let allocator = Allocator::new(&AllocatorCreateDesc {
-            instance: instance.instance.clone(),
-            device: device.clone(),
-            physical_device: adapter.physical_device,
-            debug_settings: Default::default(),
-            buffer_device_address: false,
-            allocation_sizes: Default::default(),
-        });
-        let allocator = match allocator {
-            Ok(a) => a,
-            Err(e) => {
-                // SAFETY: nothing was created from the device yet.
-                unsafe { device.destroy_device(None) };
-                return Err((
-                    instance,
-                    GpuError::Allocation {
-                        name: "allocator".into(),
-                        detail: e.to_string(),
-                    },
-                ));
-            }
-        };
-        Ok(DeviceShared {
-            device,
-            queue_family: adapter.queue_family,
-            info: adapter.info,
-            log,
-            validation,
-            allocator: ManuallyDrop::new(Mutex::new(allocator)),
-            instance,
-        })
     }
 
     pub fn allocator(&self) -> MutexGuard<'_, Allocator> {
@@ -123,6 +67,51 @@ impl Drop for DeviceShared {
             self.device.destroy_device(None);
         }
         destroy_instance(&self.instance);
+    }
+}
+
+/// Picks the adapter and creates the logical device and its allocator; on error, everything it
+/// created is destroyed again (the instance is the caller's).
+fn create_device(
+    instance: &InstanceParts,
+    device_name: Option<&str>,
+) -> Result<(ash::Device, ChosenAdapter, Allocator), GpuError> {
+    let adapter = choose_adapter(&instance.instance, device_name)?;
+    let priorities = [1.0f32];
+    let queue_info = vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(adapter.queue_family)
+        .queue_priorities(&priorities);
+    let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
+        .dynamic_rendering(true)
+        .synchronization2(true);
+    let create_info = vk::DeviceCreateInfo::default()
+        .queue_create_infos(std::slice::from_ref(&queue_info))
+        .push_next(&mut features13);
+    // SAFETY: the physical device comes from this instance; create_info lives until return.
+    let device = unsafe {
+        instance
+            .instance
+            .create_device(adapter.physical_device, &create_info, None)
+    }
+    .during("vkCreateDevice")?;
+    let allocator = Allocator::new(&AllocatorCreateDesc {
+        instance: instance.instance.clone(),
+        device: device.clone(),
+        physical_device: adapter.physical_device,
+        debug_settings: Default::default(),
+        buffer_device_address: false,
+        allocation_sizes: Default::default(),
+    });
+    match allocator {
+        Ok(allocator) => Ok((device, adapter, allocator)),
+        Err(e) => {
+            // SAFETY: nothing was created from the device yet.
+            unsafe { device.destroy_device(None) };
+            Err(GpuError::Allocation {
+                name: "allocator".into(),
+                detail: e.to_string(),
+            })
+        }
     }
 }
 

@@ -43,7 +43,8 @@ pub(crate) fn create_instance(
             .push_next(&mut debug_info);
     }
     // SAFETY: create_info and everything it points to live until the call returns.
-    let instance = unsafe { entry.create_instance(&create_info, None) }.during("vkCreateInstance")?;
+    let instance =
+        unsafe { entry.create_instance(&create_info, None) }.during("vkCreateInstance")?;
 
     let debug = if validation {
         let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
@@ -54,7 +55,10 @@ pub(crate) fn create_instance(
             Err(result) => {
                 // SAFETY: nothing else was created from the instance yet.
                 unsafe { instance.destroy_instance(None) };
-                return Err(super::error::from_vk("vkCreateDebugUtilsMessengerEXT", result));
+                return Err(super::error::from_vk(
+                    "vkCreateDebugUtilsMessengerEXT",
+                    result,
+                ));
             }
         }
     } else {

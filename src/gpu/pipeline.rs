@@ -87,7 +87,11 @@ impl PipelineLayout {
             Ok(raw) => raw,
             Err(result) => {
                 // SAFETY: created above, unused.
-                unsafe { shared.device.destroy_descriptor_set_layout(set_layout, None) };
+                unsafe {
+                    shared
+                        .device
+                        .destroy_descriptor_set_layout(set_layout, None)
+                };
                 return Err(super::error::from_vk("vkCreatePipelineLayout", result));
             }
         };
@@ -130,8 +134,8 @@ impl<'a> ShaderModule<'a> {
         })?;
         let info = vk::ShaderModuleCreateInfo::default().code(&words);
         // SAFETY: the words are SPIR-V produced by build.rs; info lives until return.
-        let raw = unsafe { device.create_shader_module(&info, None) }
-            .during("vkCreateShaderModule")?;
+        let raw =
+            unsafe { device.create_shader_module(&info, None) }.during("vkCreateShaderModule")?;
         Ok(ShaderModule { raw, device })
     }
 }

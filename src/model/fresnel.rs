@@ -17,6 +17,11 @@ use crate::{Error, Result};
 /// The header of an RGB table, exactly as SPEC §3 writes it.
 pub const RGB_HEADER: &str = "angle_deg,r,g,b";
 
+/// n(λ) = A + B/λ² of the default lacquer (SPEC §3): A = 1.500, B = 0.0045 µm², n ≈ 1.51 at 589 nm.
+pub const DEFAULT_IOR_A: f64 = 1.5;
+/// See [`DEFAULT_IOR_A`].
+pub const DEFAULT_IOR_B: f64 = 0.0045;
+
 /// The spectral range a spectral table must cover [nm] (SPEC §3: "covering 380–780 nm").
 const SPECTRAL_COVER_NM: (f64, f64) = (380.0, 780.0);
 
@@ -32,19 +37,10 @@ impl FresnelTable {
     /// equal lengths, angles finite and strictly increasing from exactly 0 to exactly 90, values
     /// finite and in [0, 1].
     pub fn new(angles_deg: Vec<f64>, rgb: Vec<[f64; 3]>) -> Result<Self> {
-        for (i, c) in rgb.iter().enumerate() {
-            if c.iter().any(|v| !(0.0..=1.0).contains(v)) {
-                return Err(Error::invalid(
-                    format!("fresnel table rgb[{i}]"),
-                    format!("{c:?}"),
-                    "each channel is a reflectance and must be a finite value in [0, 1]",
-                ));
-            }
-        }
-        Self::with_checked_angles(angles_deg, rgb)
+        Self::checked(angles_deg, rgb, true)
     }
 
-    /// Reads a CSV file and parses it with [`FresnelTable::from_csv_str`], naming the file in errors.
+    /// Reads a CSV file and parses it with [`FresnelTable::from_csv_str`]; errors name the file.
     pub fn from_csv_file(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
             path: path.to_path_buf(),
@@ -93,7 +89,7 @@ impl FresnelTable {
                 };
                 // The spectral path does not clamp (SPEC §3 says nothing of it), so a converted
                 // spectral table may leave [0, 1] slightly; only its structure is re-checked.
-                Self::with_checked_angles(angles_deg, rgb)
+                Self::checked(angles_deg, rgb, false)
             }
         }
     }
@@ -121,18 +117,14 @@ impl FresnelTable {
                 grid_reflectance_to_rgb(&spectrum)
             })
             .collect();
-        Self::with_checked_angles(angles_deg, rgb)
+        Self::checked(angles_deg, rgb, false)
     }
 
     /// F(θ), linear interpolation between entries; θ in degrees, clamped to [0, 90] (NaN → 0).
     pub fn eval(&self, theta_deg: f64) -> [f64; 3] {
         let (k, t) = locate(&self.angles_deg, theta_deg);
         let (lo, hi) = (self.rgb[k], self.rgb[k + 1]);
-        [
-            lerp(lo[0], hi[0], t),
-            lerp(lo[1], hi[1], t),
-            lerp(lo[2], hi[2], t),
-        ]
+        std::array::from_fn(|c| lerp(lo[c], hi[c], t))
     }
 
     /// The table's angles [degrees].
@@ -155,44 +147,42 @@ impl FresnelTable {
         csv
     }
 
-    /// Structure checks shared by every constructor: ≥ 2 rows, equal lengths, finite values,
-    /// angles strictly increasing from exactly 0 to exactly 90.
-    fn with_checked_angles(angles_deg: Vec<f64>, rgb: Vec<[f64; 3]>) -> Result<Self> {
-        let bad =
-            |field: String, value: String, reason: &str| Err(Error::invalid(field, value, reason));
-        if angles_deg.len() != rgb.len() || angles_deg.len() < 2 {
-            return bad(
-                "fresnel table".into(),
-                format!("{} angles, {} rgb rows", angles_deg.len(), rgb.len()),
-                "needs one rgb row per angle and at least two rows (0 and 90 degrees)",
-            );
+    /// The checks shared by every constructor: ≥ 2 rows, equal lengths, finite values, angles
+    /// strictly increasing from exactly 0 to exactly 90; values in [0, 1] if `unit_range`.
+    fn checked(angles_deg: Vec<f64>, rgb: Vec<[f64; 3]>, unit_range: bool) -> Result<Self> {
+        let (n, last) = (angles_deg.len(), angles_deg.len().saturating_sub(1));
+        if rgb.len() != n || n < 2 {
+            let value = format!("{n} angles, {} rgb rows", rgb.len());
+            let reason = "needs one rgb row per angle and at least two rows (0 and 90 degrees)";
+            return Err(Error::invalid("fresnel table", value, reason));
         }
-        for (i, c) in rgb.iter().enumerate() {
-            if c.iter().any(|v| !v.is_finite()) {
-                return bad(
-                    format!("fresnel table rgb[{i}]"),
-                    format!("{c:?}"),
-                    "values must be finite",
-                );
-            }
+        let in_range = |v: &f64| v.is_finite() && (!unit_range || (0.0..=1.0).contains(v));
+        if let Some(i) = rgb.iter().position(|c| !c.iter().all(in_range)) {
+            let reason = if unit_range {
+                "each channel is a reflectance and must be a finite value in [0, 1]"
+            } else {
+                "values must be finite"
+            };
+            return Err(Error::invalid(
+                format!("fresnel table rgb[{i}]"),
+                format!("{:?}", rgb[i]),
+                reason,
+            ));
         }
-        let last = angles_deg.len() - 1;
         if angles_deg[0] != 0.0 || angles_deg[last] != 90.0 {
-            return bad(
-                "fresnel table angles_deg".into(),
-                format!("{} .. {}", angles_deg[0], angles_deg[last]),
-                "the angles must start at exactly 0 and end at exactly 90 degrees",
-            );
+            let value = format!("{} .. {}", angles_deg[0], angles_deg[last]);
+            let reason = "the angles must start at exactly 0 and end at exactly 90 degrees";
+            return Err(Error::invalid("fresnel table angles_deg", value, reason));
         }
-        for i in 1..angles_deg.len() {
-            // `!(a < b)` also rejects NaN.
-            if angles_deg[i - 1].partial_cmp(&angles_deg[i]) != Some(std::cmp::Ordering::Less) {
-                return bad(
-                    format!("fresnel table angles_deg[{i}]"),
-                    angles_deg[i].to_string(),
-                    "angles must be finite and strictly increasing",
-                );
-            }
+        // Written as "not (a < b)" so that NaN is rejected too.
+        let increasing = |i: &usize| angles_deg[i - 1] < angles_deg[*i];
+        if let Some(i) = (1..n).find(|i| !increasing(i)) {
+            let reason = "angles must be finite and strictly increasing";
+            return Err(Error::invalid(
+                format!("fresnel table angles_deg[{i}]"),
+                angles_deg[i],
+                reason,
+            ));
         }
         Ok(FresnelTable { angles_deg, rgb })
     }
@@ -333,22 +323,20 @@ fn check_next_angle(angle: f64, previous: Option<f64>) -> std::result::Result<()
     }
 }
 
-/// The IOR law's parameter ranges (SPEC §3 defaults A = 1.5, B = 0.0045 µm²): A ≥ 1 keeps n ≥ 1
-/// (air → lacquer, no total internal reflection); B ≥ 0 is normal dispersion.
+/// The IOR law's parameter ranges: A ≥ 1 keeps n ≥ 1 (air → lacquer, no total internal
+/// reflection); B ≥ 0 is normal dispersion.
 pub(crate) fn check_ior(ior_a: f64, ior_b: f64) -> Result<()> {
     if !(ior_a.is_finite() && ior_a >= 1.0) {
-        return Err(Error::invalid(
-            "ior_a",
-            ior_a,
-            "must be a finite number >= 1 (lacquer is denser than air; default 1.5)",
-        ));
+        let reason = format!(
+            "must be a finite number >= 1 (lacquer is denser than air; default {DEFAULT_IOR_A})"
+        );
+        return Err(Error::invalid("ior_a", ior_a, reason));
     }
     if !(ior_b.is_finite() && ior_b >= 0.0) {
-        return Err(Error::invalid(
-            "ior_b",
-            ior_b,
-            "must be a finite number >= 0 in µm² (normal dispersion; default 0.0045)",
-        ));
+        let reason = format!(
+            "must be a finite number >= 0 in µm² (normal dispersion; default {DEFAULT_IOR_B})"
+        );
+        return Err(Error::invalid("ior_b", ior_b, reason));
     }
     Ok(())
 }
@@ -380,6 +368,10 @@ pub fn lacquer_ior(wavelength_nm: f64, ior_a: f64, ior_b: f64) -> f64 {
 mod tests {
     use super::*;
 
+    fn assert_close(got: f64, want: f64, tolerance: f64, what: &str) {
+        assert!((got - want).abs() < tolerance, "{what}: {got} vs {want}");
+    }
+
     /// The line number and message of a CSV that must fail to parse.
     fn csv_error(text: &str) -> (usize, String) {
         match FresnelTable::from_csv_str(text, "test.csv") {
@@ -400,18 +392,20 @@ mod tests {
         // ((n-1)/(n+1))² at cos = 1; the exact equations reduce to it, so only rounding (1e-15).
         for n in [1.0_f64, 1.33, 1.5, 1.51, 2.4] {
             let expected = ((n - 1.0) / (n + 1.0)).powi(2);
-            assert!(
-                (dielectric_reflectance(1.0, n) - expected).abs() < 1e-15,
-                "n = {n}"
-            );
+            assert_close(dielectric_reflectance(1.0, n), expected, 1e-15, "n");
         }
     }
 
     #[test]
     fn dielectric_grazing_incidence_is_one() {
         assert_eq!(dielectric_reflectance(0.0, 1.5), 1.0);
-        // Continuity: 1e-6 from grazing, 1 - F ≈ 4·cos/ (n cos_t-ish) ≈ 1e-5.
-        assert!(dielectric_reflectance(1e-6, 1.5) > 0.9999);
+        // Continuity: for small c = cos θi, 1 - F ≈ 2c·(1/(n·cos θt) + n/cos θt) = 5.8c at n = 1.5.
+        assert_close(
+            dielectric_reflectance(1e-6, 1.5),
+            1.0 - 5.8e-6,
+            1e-7,
+            "near grazing",
+        );
     }
 
     #[test]
@@ -421,10 +415,11 @@ mod tests {
             let theta_b = f64::atan(n);
             let theta_t = (theta_b.sin() / n).asin();
             let expected = 0.5 * (theta_b - theta_t).sin().powi(2);
-            let got = dielectric_reflectance(theta_b.cos(), n);
-            assert!(
-                (got - expected).abs() < 1e-14,
-                "n = {n}: {got} vs {expected}"
+            assert_close(
+                dielectric_reflectance(theta_b.cos(), n),
+                expected,
+                1e-14,
+                "Brewster",
             );
         }
     }
@@ -440,9 +435,11 @@ mod tests {
             let rs = -(ti - tt).sin() / (ti + tt).sin();
             let rp = (ti - tt).tan() / (ti + tt).tan();
             let expected = 0.5 * (rs * rs + rp * rp);
-            assert!(
-                (dielectric_reflectance(ti.cos(), n) - expected).abs() < 1e-14,
-                "{deg}°"
+            assert_close(
+                dielectric_reflectance(ti.cos(), n),
+                expected,
+                1e-14,
+                "angle form",
             );
         }
     }
@@ -451,8 +448,8 @@ mod tests {
     fn lacquer_ior_is_cauchy_in_micrometres() {
         // n(589 nm) = 1.5 + 0.0045 / 0.589² ≈ 1.51297 (SPEC: "n ≈ 1.51 at 589 nm").
         let n = lacquer_ior(589.0, 1.5, 0.0045);
-        assert!((n - (1.5 + 0.0045 / 0.346921)).abs() < 1e-12, "{n}");
-        assert!((n - 1.51297).abs() < 1e-5);
+        assert_close(n, 1.5 + 0.0045 / 0.346921, 1e-12, "n(589)");
+        assert_close(n, 1.51297, 1e-5, "n(589)");
     }
 
     #[test]
@@ -509,8 +506,8 @@ mod tests {
         .unwrap();
         // Midpoint of the first segment: (0.15, 0.25, 0.35) to rounding (1e-15).
         let mid = table.eval(15.0);
-        for (got, want) in mid.iter().zip([0.15, 0.25, 0.35]) {
-            assert!((got - want).abs() < 1e-15, "{mid:?}");
+        for (got, want) in mid.into_iter().zip([0.15, 0.25, 0.35]) {
+            assert_close(got, want, 1e-15, "midpoint");
         }
         assert_eq!(table.eval(30.0), [0.3, 0.4, 0.5]);
         assert_eq!(table.eval(-5.0), [0.0, 0.1, 0.2]);
@@ -522,6 +519,7 @@ mod tests {
     #[test]
     fn new_rejects_every_malformed_table() {
         let ok = [0.5; 3];
+        #[rustfmt::skip]
         let cases: Vec<(Vec<f64>, Vec<[f64; 3]>)> = vec![
             (vec![0.0], vec![ok]),                               // one row
             (vec![0.0, 90.0], vec![ok]),                         // length mismatch
@@ -548,7 +546,8 @@ mod tests {
 
     #[test]
     fn rgb_csv_parses_with_bom_crlf_whitespace_and_trailing_blank_lines() {
-        let text = "\u{feff}angle_deg,r,g,b\r\n 0 , 0.04,0.05 ,0.06\r\n45,0.1,0.1,0.1\r\n90,1,1,1\r\n\r\n  \n";
+        let text = "\u{feff}angle_deg,r,g,b\r\n 0 , 0.04,0.05 ,0.06\r\n45,0.1,0.1,0.1\r\n\
+                    90,1,1,1\r\n\r\n  \n";
         let table = FresnelTable::from_csv_str(text, "t").unwrap();
         assert_eq!(table.angles_deg(), &[0.0, 45.0, 90.0]);
         assert_eq!(
@@ -564,9 +563,9 @@ mod tests {
         let table = FresnelTable::from_csv_str(text, "t").unwrap();
         assert_eq!(table.rgb()[1], [1.0; 3]);
         for c in table.rgb()[0] {
-            assert!((c - 0.5).abs() < 1e-15);
+            assert_close(c, 0.5, 1e-15, "flat 0.5");
         }
-        // A table that rises in the blue at grazing angles (the paper's observation) is bluer there.
+        // A table rising in the blue at grazing angles (the paper's observation) is bluer there.
         let text = "angle_deg,380,500,600,780\n0,0.04,0.04,0.04,0.04\n90,0.9,0.2,0.1,0.1\n";
         let blue = FresnelTable::from_csv_str(text, "t").unwrap().eval(90.0);
         assert!(blue[2] > blue[1] && blue[2] > blue[0], "{blue:?}");
@@ -574,17 +573,14 @@ mod tests {
 
     #[test]
     fn every_csv_error_names_its_line() {
+        #[rustfmt::skip]
         let cases: [(&str, usize, &str); 22] = [
             ("", 1, "empty file"),
             ("\u{feff}\n  \n", 1, "empty file"),
             ("0,0,0,0\n90,1,1,1\n", 1, "missing header"),
             ("angle,r,g,b\n0,0,0,0\n90,1,1,1\n", 1, "wrong header"),
             ("angle_deg,r,g\n0,0,0\n90,1,1\n", 1, "wrong header"),
-            (
-                "angle_deg,r,g,b,\n0,0,0,0\n90,1,1,1\n",
-                1,
-                "not a wavelength",
-            ),
+            ("angle_deg,r,g,b,\n0,0,0,0\n90,1,1,1\n", 1, "not a wavelength"),
             ("angle_deg,r,g,b\n", 1, "no data rows"),
             ("angle_deg,r,g,b\n0,0,0\n90,1,1,1\n", 2, "expected 4"),
             ("angle_deg,r,g,b\n0,0,0,0\n90,1,1,1,1\n", 3, "expected 4"),
@@ -592,33 +588,13 @@ mod tests {
             ("angle_deg,r,g,b\n0,0,,0\n90,1,1,1\n", 2, "empty"),
             ("angle_deg,r,g,b\n0,0,NaN,0\n90,1,1,1\n", 2, "not finite"),
             ("angle_deg,r,g,b\n0,0,0,0\n90,inf,1,1\n", 3, "not finite"),
-            (
-                "angle_deg,r,g,b\n5,0,0,0\n90,1,1,1\n",
-                2,
-                "first angle must be 0",
-            ),
-            (
-                "angle_deg,r,g,b\n0,0,0,0\n40,0,0,0\n30,0,0,0\n90,1,1,1\n",
-                4,
-                "strictly increase",
-            ),
-            (
-                "angle_deg,r,g,b\n0,0,0,0\n80,1,1,1\n\n",
-                3,
-                "last angle must be 90",
-            ),
+            ("angle_deg,r,g,b\n5,0,0,0\n90,1,1,1\n", 2, "first angle must be 0"),
+            ("angle_deg,r,g,b\n0,0,0,0\n40,0,0,0\n30,0,0,0\n90,1,1,1\n", 4, "strictly increase"),
+            ("angle_deg,r,g,b\n0,0,0,0\n80,1,1,1\n\n", 3, "last angle must be 90"),
             ("angle_deg,r,g,b\n0,0,0,0\n95,1,1,1\n", 3, "above 90"),
             ("angle_deg,r,g,b\n0,0,0,0\n\n90,1,1,1\n", 3, "blank line"),
-            (
-                "angle_deg,r,g,b\n0,0,0,0\n90,1,1.2,1\n",
-                3,
-                "outside [0, 1]",
-            ),
-            (
-                "angle_deg,380,600,500,780\n0,0,0,0,0\n90,1,1,1,1\n",
-                1,
-                "strictly increase",
-            ),
+            ("angle_deg,r,g,b\n0,0,0,0\n90,1,1.2,1\n", 3, "outside [0, 1]"),
+            ("angle_deg,380,600,500,780\n0,0,0,0,0\n90,1,1,1,1\n", 1, "strictly increase"),
             ("angle_deg,400,780\n0,0,0\n90,1,1\n", 1, "do not cover"),
             ("angle_deg,380,780\n0,0,-0.1\n90,1,1\n", 2, "outside [0, 1]"),
         ];

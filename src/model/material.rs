@@ -8,7 +8,7 @@
 use std::path::PathBuf;
 
 use super::brdf::BrdfParams;
-use super::fresnel::{check_ior, FresnelTable};
+use super::fresnel::{check_ior, FresnelTable, DEFAULT_IOR_A, DEFAULT_IOR_B};
 use crate::{Error, Result};
 
 /// One lacquer material. Field names follow the paper; the text keys of [`LacquerMaterial::set`]
@@ -44,32 +44,16 @@ pub struct LacquerMaterial {
 }
 
 /// Every preset name; `smooth` and `rough` alone mean the black colorant (SPEC §2).
+#[rustfmt::skip]
 pub const PRESET_NAMES: &[&str] = &[
-    "smooth",
-    "rough",
-    "smooth-black",
-    "smooth-red",
-    "rough-black",
-    "rough-red",
+    "smooth", "rough", "smooth-black", "smooth-red", "rough-black", "rough-red",
 ];
 
 /// Every key [`LacquerMaterial::set`] accepts, in field order.
+#[rustfmt::skip]
 pub const MATERIAL_KEYS: &[&str] = &[
-    "m",
-    "a",
-    "b",
-    "c0",
-    "c1",
-    "c2",
-    "r",
-    "kd",
-    "extrapolate_g",
-    "ior_a",
-    "ior_b",
-    "fresnel",
-    "beta_normal",
-    "beta_grazing",
-    "beta_power",
+    "m", "a", "b", "c0", "c1", "c2", "r", "kd", "extrapolate_g", "ior_a", "ior_b", "fresnel",
+    "beta_normal", "beta_grazing", "beta_power",
 ];
 
 /// g(r) coefficients fitted by the paper, shared by both finishes (SPEC §2).
@@ -140,8 +124,8 @@ impl LacquerMaterial {
             lacquer_ratio: 1.0,
             albedo,
             extrapolate_g: false,
-            ior_a: 1.5,
-            ior_b: 0.0045,
+            ior_a: DEFAULT_IOR_A,
+            ior_b: DEFAULT_IOR_B,
             fresnel_file: None,
             beta_normal: finish.beta_normal,
             beta_grazing: finish.beta_grazing,
@@ -263,19 +247,25 @@ impl LacquerMaterial {
         let r_max = self.lacquer_ratio_max();
         if !self.extrapolate_g && !(1.0..=r_max).contains(&r) {
             let reason = if r_max < 1.0 {
-                format!("g(r) = c0 + c1·r + c2·r² has its minimum at r* = {r_max} < 1, so no r is in the fitted domain [1, r*]; fix c0, c1, c2 or set extrapolate_g = true")
+                format!(
+                    "g(r) = c0 + c1·r + c2·r² has its minimum at r* = {r_max} < 1, so no r is in \
+                     the fitted domain [1, r*]; fix c0, c1, c2 or set extrapolate_g = true"
+                )
             } else {
-                format!("must be in [1, {r_max}] (the paper fitted g(r) from r = 1 up to its minimum r* = -c1/(2·c2)); use a value in that range or set extrapolate_g = true")
+                format!(
+                    "must be in [1, {r_max}] (the paper fitted g(r) from r = 1 up to its minimum \
+                     r* = -c1/(2·c2)); use a value in that range or set extrapolate_g = true"
+                )
             };
             return Err(Error::invalid("r", r, reason));
         }
         let g = self.lacquer_g();
         if g.is_nan() || g < 0.0 {
-            return Err(Error::invalid(
-                "r",
-                r,
-                format!("gives g(r) = {g} < 0, which would make the diffuse radiance negative; choose r (or c0, c1, c2) so that c0 + c1·r + c2·r² >= 0"),
-            ));
+            let reason = format!(
+                "gives g(r) = {g} < 0, which would make the diffuse radiance negative; choose r \
+                 (or c0, c1, c2) so that c0 + c1·r + c2·r² >= 0"
+            );
+            return Err(Error::invalid("r", r, reason));
         }
         Ok(())
     }
@@ -349,7 +339,8 @@ fn checked_albedo(kd: [f64; 3]) -> Result<[f64; 3]> {
         Err(Error::invalid(
             "kd",
             format!("{},{},{}", kd[0], kd[1], kd[2]),
-            "each channel of the colorant albedo must be in [0, 1] (black 0.02,0.02,0.02; red 0.5,0.06,0.03)",
+            "each channel of the colorant albedo must be in [0, 1] \
+             (black 0.02,0.02,0.02; red 0.5,0.06,0.03)",
         ))
     }
 }
@@ -483,6 +474,7 @@ mod tests {
     #[test]
     fn every_validation_rule_rejects_with_its_range() {
         type Edit = fn(&mut LacquerMaterial);
+        #[rustfmt::skip]
         let cases: [(Edit, &str, &str); 18] = [
             (|m| m.beckmann_m = 0.0, "m", "(0, 1]"),
             (|m| m.beckmann_m = 1.5, "m", "(0, 1]"),
@@ -495,16 +487,9 @@ mod tests {
             (|m| m.lacquer_ratio = 0.5, "r", "[1, 5.62"),
             (|m| m.lacquer_ratio = 6.0, "r", "extrapolate_g"),
             (|m| m.lacquer_ratio = f64::NAN, "r", "finite"),
-            (
-                |m| m.lacquer_law = [1.0, 0.1, 0.1],
-                "r",
-                "no r is in the fitted domain",
-            ),
-            (
-                |m| (m.extrapolate_g, m.lacquer_ratio, m.lacquer_law[2]) = (true, 10.0, -0.1),
-                "r",
-                "g(r) =",
-            ),
+            (|m| m.lacquer_law = [1.0, 0.1, 0.1], "r", "no r is in the fitted domain"),
+            (|m| (m.extrapolate_g, m.lacquer_ratio, m.lacquer_law[2]) = (true, 10.0, -0.1),
+                "r", "g(r) ="),
             (|m| m.ior_a = 0.99, "ior_a", ">= 1"),
             (|m| m.ior_b = -0.001, "ior_b", ">= 0"),
             (|m| m.beta_normal = 0.0, "beta_normal", "> 0"),
@@ -526,8 +511,11 @@ mod tests {
 
     #[test]
     fn extrapolate_g_admits_r_beyond_the_fitted_domain() {
-        let mut m = LacquerMaterial::default();
-        m.lacquer_ratio = 8.0; // g(8) = 1.22 - 1.792 + 1.2736 = 0.7016 ≥ 0
+        // g(8) = 1.22 - 1.792 + 1.2736 = 0.7016 ≥ 0, but 8 > r*.
+        let mut m = LacquerMaterial {
+            lacquer_ratio: 8.0,
+            ..LacquerMaterial::default()
+        };
         assert!(m.validate().is_err());
         m.extrapolate_g = true;
         m.validate().unwrap();
@@ -540,22 +528,12 @@ mod tests {
     #[test]
     fn set_round_trips_every_key() {
         let mut m = LacquerMaterial::default();
+        #[rustfmt::skip]
         let edits = [
-            ("m", "0.3"),
-            ("a", "-0.5"),
-            ("b", " 2 "),
-            ("c0", "1.1"),
-            ("c1", "-0.2"),
-            ("c2", "0.01"),
-            ("r", "2.5"),
-            ("kd", "0.1, 0.2,0.3"),
-            ("extrapolate_g", "true"),
-            ("ior_a", "1.6"),
-            ("ior_b", "0.01"),
-            ("fresnel", "tables/blue.csv"),
-            ("beta_normal", "0.4"),
-            ("beta_grazing", "0.02"),
-            ("beta_power", "2"),
+            ("m", "0.3"), ("a", "-0.5"), ("b", " 2 "), ("c0", "1.1"), ("c1", "-0.2"),
+            ("c2", "0.01"), ("r", "2.5"), ("kd", "0.1, 0.2,0.3"), ("extrapolate_g", "true"),
+            ("ior_a", "1.6"), ("ior_b", "0.01"), ("fresnel", "tables/blue.csv"),
+            ("beta_normal", "0.4"), ("beta_grazing", "0.02"), ("beta_power", "2"),
         ];
         assert_eq!(edits.len(), MATERIAL_KEYS.len());
         for (key, value) in edits {

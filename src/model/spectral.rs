@@ -76,9 +76,9 @@ pub fn srgb_unnormalised(xyz: &[f64; 3]) -> [f64; 3] {
     SRGB_FROM_XYZ.map(|row| row[0] * xyz[0] + row[1] * xyz[1] + row[2] * xyz[2])
 }
 
-/// The segment of the strictly increasing `xs` that holds `x`: (k, t) with x = xs[k] + t·(xs[k+1]
-/// - xs[k]), t in [0, 1]. Outside the range, x is clamped to the nearest end (t = 0 or 1); NaN
-/// is treated as the first end. Needs `xs.len() >= 2` for a segment; with one entry it gives (0, 0).
+/// The segment of the strictly increasing `xs` that holds `x`: (k, t) with
+/// x = xs[k] + t·(xs[k+1] − xs[k]) and t in [0, 1]. Outside the range x is clamped to the nearest
+/// end (t = 0 or 1); NaN is treated as the first end. With fewer than two entries it gives (0, 0).
 pub(crate) fn locate(xs: &[f64], x: f64) -> (usize, f64) {
     let n = xs.len();
     if n < 2 || x.is_nan() || x <= xs[0] {

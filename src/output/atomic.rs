@@ -75,7 +75,8 @@ fn replace_via_temp(path: &Path, bytes: &[u8]) -> std::result::Result<(), String
     let directory = directory_of(path);
     let mut temp = TempFile::create_in(directory, file_name)?;
     let temp_name = temp.path.display().to_string();
-    let describe = |what: &str, e: io::Error| format!("{what} the temporary file {temp_name} failed ({e})");
+    let describe =
+        |what: &str, e: io::Error| format!("{what} the temporary file {temp_name} failed ({e})");
     temp.file
         .write_all(bytes)
         .map_err(|e| describe("writing", e))?;
@@ -143,7 +144,10 @@ struct TempFile {
 impl TempFile {
     /// Creates `.<name>.<pid>-<n>.tmp` in `directory` with `create_new`, so two runs (or two
     /// threads) writing the same output never share a temporary file.
-    fn create_in(directory: &Path, file_name: &std::ffi::OsStr) -> std::result::Result<Self, String> {
+    fn create_in(
+        directory: &Path,
+        file_name: &std::ffi::OsStr,
+    ) -> std::result::Result<Self, String> {
         static COUNTER: AtomicU64 = AtomicU64::new(0);
         // Bounded so that a target name near the 255-byte limit still has a valid temp name.
         let stem: String = file_name.to_string_lossy().chars().take(64).collect();
@@ -211,9 +215,10 @@ mod tests {
     }
 
     fn scratch_dir(name: &str) -> Scratch {
-        let dir = std::env::temp_dir()
-            .join(format!("shikki-output-atomic-{}", std::process::id()))
-            .join(name);
+        let dir = std::env::temp_dir().join(format!(
+            "shikki-output-atomic-{}-{name}",
+            std::process::id()
+        ));
         let _ = fs::remove_dir_all(&dir);
         fs::create_dir_all(&dir).unwrap();
         Scratch(dir)
@@ -270,7 +275,11 @@ mod tests {
         let message = write_atomically(&target, b"data").unwrap_err().to_string();
         assert!(message.contains("is a directory"), "{message}");
         assert_eq!(entries(&dir), vec!["out.png"]);
-        assert_eq!(entries(&target), vec!["keep"], "a directory is never removed");
+        assert_eq!(
+            entries(&target),
+            vec!["keep"],
+            "a directory is never removed"
+        );
     }
 
     #[test]
@@ -279,7 +288,11 @@ mod tests {
         let temp = TempFile::create_in(&dir, "x.png".as_ref()).unwrap();
         let temp_path = temp.path.clone();
         assert!(temp_path.exists());
-        assert!(temp_path.file_name().unwrap().to_string_lossy().starts_with(".x.png."));
+        assert!(temp_path
+            .file_name()
+            .unwrap()
+            .to_string_lossy()
+            .starts_with(".x.png."));
         drop(temp);
         assert!(!temp_path.exists());
     }

@@ -9,8 +9,7 @@ use std::io::Cursor;
 
 use exr::prelude::traits::*;
 use exr::prelude::{
-    Blocks, Compression, Encoding, Image, Layer, LayerAttributes, LineOrder, SpecificChannels,
-    Vec2,
+    Blocks, Compression, Encoding, Image, Layer, LayerAttributes, LineOrder, SpecificChannels, Vec2,
 };
 
 use super::image::HdrImage;

@@ -109,14 +109,16 @@ mod tests {
                 .unwrap_err()
                 .to_string();
             assert!(message.contains(path), "{message}");
-            assert!(message.contains(".png") && message.contains(".exr"), "{message}");
+            assert!(
+                message.contains(".png") && message.contains(".exr"),
+                "{message}"
+            );
         }
     }
 
     fn scratch(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir()
-            .join(format!("shikki-output-mod-{}", std::process::id()))
-            .join(name);
+        let dir =
+            std::env::temp_dir().join(format!("shikki-output-mod-{}-{name}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         dir
@@ -125,7 +127,9 @@ mod tests {
     #[test]
     fn preflight_rejects_bad_extension_and_missing_directory_and_creates_nothing() {
         let dir = scratch("preflight");
-        let jpg = preflight_output(&dir.join("out.jpg")).unwrap_err().to_string();
+        let jpg = preflight_output(&dir.join("out.jpg"))
+            .unwrap_err()
+            .to_string();
         assert!(jpg.contains("out.jpg") && jpg.contains(".exr"), "{jpg}");
         let missing = preflight_output(&dir.join("nope").join("out.png"))
             .unwrap_err()
@@ -180,8 +184,8 @@ mod tests {
         };
         write_image(&dir.join("a.PNG"), &image, &settings).unwrap();
         write_image(&dir.join("a.exr"), &image, &settings).unwrap();
-        let (_, _, png_pixels) = png::decode_png_rgba8(&std::fs::read(dir.join("a.PNG")).unwrap())
-            .unwrap();
+        let (_, _, png_pixels) =
+            png::decode_png_rgba8(&std::fs::read(dir.join("a.PNG")).unwrap()).unwrap();
         // 4.0 clamps to 255 with no curve; 0.5 → sRGB 0.7353569 → 188 (hand values, tonemap.rs).
         assert_eq!(png_pixels[0], [255, 188, 0, 255]);
         let exr_image = exr::decode_exr(&std::fs::read(dir.join("a.exr")).unwrap()).unwrap();

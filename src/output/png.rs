@@ -36,7 +36,13 @@ pub fn encode_png(image: &HdrImage, settings: &PngSettings) -> Result<Vec<u8>> {
     );
     encoder
         .write_image(&rgba8, image.width, image.height, ExtendedColorType::Rgba8)
-        .map_err(|e| Error::invalid("PNG image", format!("{}×{}", image.width, image.height), format!("the PNG encoder refused it ({e}); PNG allows 1 to 2^31−1 pixels per side")))?;
+        .map_err(|e| {
+            Error::invalid(
+                "PNG image",
+                format!("{}×{}", image.width, image.height),
+                format!("the PNG encoder refused it ({e}); PNG allows 1 to 2^31−1 pixels per side"),
+            )
+        })?;
     Ok(bytes)
 }
 
@@ -89,15 +95,24 @@ mod tests {
             [188, 188, 188, 128]
         );
         // Full coverage: no division. Quarter coverage of radiance 1 (0.25 stored) → 255.
-        assert_eq!(straight_srgb8([0.5, 0.0, 1.0, 1.0], &LINEAR), [188, 0, 255, 255]);
-        assert_eq!(straight_srgb8([0.25, 0.0, 0.0, 0.25], &LINEAR), [255, 0, 0, 64]);
+        assert_eq!(
+            straight_srgb8([0.5, 0.0, 1.0, 1.0], &LINEAR),
+            [188, 0, 255, 255]
+        );
+        assert_eq!(
+            straight_srgb8([0.25, 0.0, 0.0, 0.25], &LINEAR),
+            [255, 0, 0, 64]
+        );
     }
 
     #[test]
     fn zero_coverage_is_transparent_black_and_alpha_is_clamped() {
         assert_eq!(straight_srgb8([0.0; 4], &LINEAR), [0, 0, 0, 0]);
         // Alpha above 1 (resolve round-off) clamps to 1, so colour is not darkened by it.
-        assert_eq!(straight_srgb8([0.5, 0.5, 0.5, 1.5], &LINEAR), [188, 188, 188, 255]);
+        assert_eq!(
+            straight_srgb8([0.5, 0.5, 0.5, 1.5], &LINEAR),
+            [188, 188, 188, 255]
+        );
     }
 
     #[test]

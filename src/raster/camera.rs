@@ -239,7 +239,10 @@ mod tests {
         let ray = camera.primary_ray(50.0, 0.5, 100, 100);
         assert!(ray.y > 0.0, "ray at py = 0.5 should point up, got {ray}");
         let ray = camera.primary_ray(0.5, 50.0, 100, 100);
-        assert!(ray.x < 0.0, "ray at px = 0.5 should point left (-X), got {ray}");
+        assert!(
+            ray.x < 0.0,
+            "ray at px = 0.5 should point left (-X), got {ray}"
+        );
     }
 
     #[test]

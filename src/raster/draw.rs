@@ -15,6 +15,7 @@ use crate::raster::lights::{Light, MAX_LIGHTS};
 use crate::raster::mesh::Mesh;
 use crate::shading::{self, FrameUniforms};
 use crate::{Error, Result};
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 
 /// Sample counts the renderer offers (the issue's `--samples 1|4`; lavapipe supports exactly these).
@@ -54,6 +55,18 @@ const BINDINGS: [Binding; 2] = [
 
 /// Interleaved position (xyz) + normal (xyz), f32.
 const VERTEX_STRIDE: u32 = 24;
+const VERTEX_ATTRIBUTES: [VertexAttribute; 2] = [
+    VertexAttribute {
+        location: 0,
+        offset: 0,
+        components: 3,
+    },
+    VertexAttribute {
+        location: 1,
+        offset: 12,
+        components: 3,
+    },
+];
 
 /// The lacquer raster renderer; keeps its pipelines between draws.
 #[derive(Default)]
@@ -67,34 +80,23 @@ impl LacquerRenderer {
     }
 
     fn pipeline(&mut self, gpu: &GpuContext, samples: u32) -> Result<&GraphicsPipeline> {
-        if !self.pipelines.contains_key(&samples) {
-            let pipeline = gpu.create_graphics_pipeline(&GraphicsPipelineDesc {
-                name: "lacquer",
-                vertex_spirv: crate::gpu::shaders::MESH_VERT,
-                fragment_spirv: crate::gpu::shaders::LACQUER_FRAG,
-                bindings: &BINDINGS,
-                vertex_stride: VERTEX_STRIDE,
-                vertex_attributes: &[
-                    VertexAttribute {
-                        location: 0,
-                        offset: 0,
-                        components: 3,
-                    },
-                    VertexAttribute {
-                        location: 1,
-                        offset: 12,
-                        components: 3,
-                    },
-                ],
-                color_format: Format::Rgba32Float,
-                depth_format: Format::Depth32Float,
-                samples,
-            })?;
-            self.pipelines.insert(samples, pipeline);
+        match self.pipelines.entry(samples) {
+            Entry::Occupied(entry) => Ok(entry.into_mut()),
+            Entry::Vacant(entry) => {
+                let pipeline = gpu.create_graphics_pipeline(&GraphicsPipelineDesc {
+                    name: "lacquer",
+                    vertex_spirv: crate::gpu::shaders::MESH_VERT,
+                    fragment_spirv: crate::gpu::shaders::LACQUER_FRAG,
+                    bindings: &BINDINGS,
+                    vertex_stride: VERTEX_STRIDE,
+                    vertex_attributes: &VERTEX_ATTRIBUTES,
+                    color_format: Format::Rgba32Float,
+                    depth_format: Format::Depth32Float,
+                    samples,
+                })?;
+                Ok(entry.insert(pipeline))
+            }
         }
-        self.pipelines
-            .get(&samples)
-            .ok_or_else(|| Error::invalid("samples", samples, "internal: pipeline missing"))
     }
 
     /// Renders `scene` and reads the image back (linear radiance, alpha = coverage, row 0 top).

@@ -34,7 +34,10 @@ impl Light {
             return Err(Error::invalid(
                 "light",
                 spec,
-                format!("needs three `:`-separated parts, found {}; {SYNTAX}", parts.len()),
+                format!(
+                    "needs three `:`-separated parts, found {}; {SYNTAX}",
+                    parts.len()
+                ),
             ));
         };
         let kind = kind.trim();
@@ -84,12 +87,7 @@ impl Light {
             Light::Directional {
                 to_light,
                 irradiance,
-            } => (
-                "light.direction",
-                to_light,
-                "light.irradiance",
-                irradiance,
-            ),
+            } => ("light.direction", to_light, "light.irradiance", irradiance),
             Light::Point {
                 position,
                 intensity,
@@ -268,8 +266,14 @@ mod tests {
             let back = Light::parse(&light.to_string()).unwrap();
             match (light, back) {
                 (
-                    Light::Directional { to_light: a, irradiance: ea },
-                    Light::Directional { to_light: b, irradiance: eb },
+                    Light::Directional {
+                        to_light: a,
+                        irradiance: ea,
+                    },
+                    Light::Directional {
+                        to_light: b,
+                        irradiance: eb,
+                    },
                 ) => {
                     assert!((a - b).abs().max_element() < 1e-15);
                     assert_eq!(ea, eb);
@@ -303,7 +307,10 @@ mod tests {
                 reason.contains(expected),
                 "{spec}: reason `{reason}` lacks `{expected}`"
             );
-            assert!(reason.contains("dir:x,y,z:r,g,b"), "{spec}: no syntax shown");
+            assert!(
+                reason.contains("dir:x,y,z:r,g,b"),
+                "{spec}: no syntax shown"
+            );
         }
     }
 

@@ -138,7 +138,11 @@ pub fn sphere(segments_around: u32, segments_down: u32) -> Mesh {
         }
     }
     for k in 0..around {
-        indices.extend([ring_vertex(down - 1, k), south, ring_vertex(down - 1, k + 1)]);
+        indices.extend([
+            ring_vertex(down - 1, k),
+            south,
+            ring_vertex(down - 1, k + 1),
+        ]);
     }
 
     Mesh {

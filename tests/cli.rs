@@ -1,0 +1,351 @@
+//! The `shikki` binary as a user runs it: defaults, determinism, and every kind of bad input
+//! giving a clear error, a non-zero exit code and no output file. Validation is on
+//! (SHIKKI_VALIDATION=1), and with it any validation message fails the command itself.
+
+use shikki::model::LacquerMaterial;
+use shikki::oracle::{self, AnalyticShape, OracleScene};
+use shikki::raster::camera::Camera;
+use shikki::raster::lights::Light;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn shikki(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_shikki"))
+        .args(args)
+        .current_dir(dir)
+        .env("SHIKKI_VALIDATION", "1")
+        .output()
+        .expect("the shikki binary runs")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn assert_ok(out: &Output) {
+    assert!(out.status.success(), "shikki failed: {}", stderr(out));
+}
+
+/// Runs a failing command and checks: exit ≠ 0, stderr names every `expected` fragment, and no
+/// file was left at `output` (relative to `dir`).
+fn assert_fails(dir: &Path, args: &[&str], output: &str, expected: &[&str]) {
+    let out = shikki(dir, args);
+    let err = stderr(&out);
+    assert!(!out.status.success(), "expected failure for {args:?}");
+    assert_ne!(out.status.code(), Some(0));
+    for fragment in expected {
+        assert!(
+            err.to_lowercase().contains(&fragment.to_lowercase()),
+            "{args:?}: stderr lacks {fragment:?}:\n{err}"
+        );
+    }
+    assert!(!dir.join(output).exists(), "{args:?} left {output}");
+}
+
+#[test]
+fn no_arguments_renders_the_default_scene_to_shikki_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = shikki(dir.path(), &[]);
+    assert_ok(&out);
+    let bytes = std::fs::read(dir.path().join("shikki.png")).unwrap();
+    let (w, h, pixels) = shikki::output::png::decode_png_rgba8(&bytes).unwrap();
+    assert_eq!((w, h), (1024, 1024));
+    // Something was drawn: a lit, red object in the middle, transparent corners.
+    let centre = pixels[(512 * w + 512) as usize];
+    assert_eq!(centre[3], 255);
+    assert!(
+        centre[0] > centre[1] && centre[0] > centre[2],
+        "centre {centre:?} is not red"
+    );
+    assert_eq!(pixels[0][3], 0);
+}
+
+#[test]
+fn identical_inputs_give_bit_identical_png_and_exr() {
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["png", "exr"] {
+        let mut files = Vec::new();
+        for run in 0..2 {
+            let name = format!("run{run}.{ext}");
+            let out = shikki(
+                dir.path(),
+                &[
+                    "render",
+                    "-o",
+                    &name,
+                    "--size",
+                    "96x64",
+                    "--preset",
+                    "rough-red",
+                ],
+            );
+            assert_ok(&out);
+            files.push(std::fs::read(dir.path().join(&name)).unwrap());
+        }
+        assert!(files[0] == files[1], "{ext}: two identical runs differ");
+    }
+}
+
+#[test]
+fn exr_output_is_linear_radiance_with_coverage_alpha() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = [
+        "render",
+        "-o",
+        "a.exr",
+        "--size",
+        "64x64",
+        "--samples",
+        "1",
+        "--preset",
+        "rough-black",
+        "--light",
+        "dir:0,0,1:2,2,2",
+    ];
+    assert_ok(&shikki(dir.path(), &args));
+    let image =
+        shikki::output::exr::decode_exr(&std::fs::read(dir.path().join("a.exr")).unwrap()).unwrap();
+    assert_eq!((image.width, image.height), (64, 64));
+    assert_eq!(image.get(0, 0), [0.0; 4], "background is transparent black");
+    let centre = image.get(32, 32);
+    assert_eq!(centre[3], 1.0);
+    // Linear radiance, no exposure or tone curve: the oracle's value at that pixel. Hand check of
+    // the order of magnitude face-on: (F(0)·D(1)/4 + k_d·(a+b)·g/π)·E = (0.0414/(4π·0.04) +
+    // 0.02·0.97·1.0159/π)·2 ≈ 0.177. 1 % covers the tessellated sphere (see gpu_raster.rs).
+    let material = LacquerMaterial::preset("rough-black").unwrap();
+    let lights = [Light::parse("dir:0,0,1:2,2,2").unwrap()];
+    let camera = Camera::default();
+    let scene = OracleScene {
+        shape: AnalyticShape::Sphere,
+        camera: &camera,
+        lights: &lights,
+        brdf: &material.brdf_params().unwrap(),
+        fresnel: &material.fresnel_table().unwrap(),
+    };
+    let expected = oracle::render(&scene, 64, 64).get(32, 32);
+    for c in 0..3 {
+        assert!(
+            (centre[c] - expected[c]).abs() <= 0.01 * expected[c],
+            "centre {centre:?} vs oracle {expected:?}"
+        );
+    }
+    assert!(
+        (0.15..0.19).contains(&centre[0]),
+        "centre radiance {centre:?}"
+    );
+}
+
+#[test]
+fn bad_material_values_fail_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = ["render", "-o", "x.png", "--size", "32x32"];
+    let cases: &[(&[&str], &[&str])] = &[
+        (&["--set", "r=7"], &["r", "7", "1", "5.6"]),
+        (&["--set", "r=0.5"], &["r", "0.5"]),
+        (&["--set", "m=0"], &["m", "(0, 1]"]),
+        (&["--set", "m=-0.2"], &["m", "-0.2"]),
+        (&["--set", "m=NaN"], &["m", "nan"]),
+        (&["--set", "a=inf"], &["a", "inf"]),
+        (&["--set", "kd=0.5,2,0.1"], &["kd"]),
+        (&["--set", "shininess=3"], &["shininess"]),
+        (&["--set", "m"], &["key=value"]),
+        (&["--preset", "glossy"], &["glossy", "smooth-red"]),
+    ];
+    for (extra, expected) in cases {
+        let args: Vec<&str> = base.iter().chain(extra.iter()).copied().collect();
+        assert_fails(dir.path(), &args, "x.png", expected);
+    }
+}
+
+#[test]
+fn malformed_fresnel_csv_fails_with_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            "unsorted.csv",
+            "angle_deg,r,g,b\n0,0.04,0.04,0.04\n50,0.1,0.1,0.1\n40,0.2,0.2,0.2\n90,1,1,1\n",
+            "4",
+        ),
+        (
+            "no_zero.csv",
+            "angle_deg,r,g,b\n5,0.04,0.04,0.04\n90,1,1,1\n",
+            "2",
+        ),
+        (
+            "no_ninety.csv",
+            "angle_deg,r,g,b\n0,0.04,0.04,0.04\n80,1,1,1\n",
+            "3",
+        ),
+        (
+            "range.csv",
+            "angle_deg,r,g,b\n0,0.04,1.5,0.04\n90,1,1,1\n",
+            "2",
+        ),
+        (
+            "header.csv",
+            "theta,red,green,blue\n0,0.04,0.04,0.04\n90,1,1,1\n",
+            "1",
+        ),
+    ];
+    for (name, text, line) in cases {
+        std::fs::write(dir.path().join(name), text).unwrap();
+        let set = format!("fresnel={name}");
+        let args = ["render", "-o", "x.png", "--size", "32x32", "--set", &set];
+        assert_fails(dir.path(), &args, "x.png", &[&format!("{name}:{line}")]);
+    }
+}
+
+#[test]
+fn unwritable_output_fails_before_rendering_and_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    assert_fails(
+        dir.path(),
+        &["render", "-o", "missing/dir/x.png", "--size", "32x32"],
+        "missing/dir/x.png",
+        &["missing/dir"],
+    );
+    assert_fails(
+        dir.path(),
+        &["render", "-o", "x.jpg", "--size", "32x32"],
+        "x.jpg",
+        &["x.jpg", ".png", ".exr"],
+    );
+}
+
+#[test]
+fn a_failed_run_removes_a_stale_output_file() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("x.png"), b"old image").unwrap();
+    assert_fails(
+        dir.path(),
+        &["render", "-o", "x.png", "--size", "32x32", "--set", "m=2"],
+        "x.png",
+        &["m"],
+    );
+}
+
+#[test]
+fn bad_cli_values_fail_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = ["render", "-o", "x.png"];
+    let cases: &[(&[&str], &[&str])] = &[
+        (&["--size", "0x10"], &["size"]),
+        (&["--size", "10"], &["size"]),
+        (&["--samples", "3"], &["samples", "1", "4"]),
+        (&["--light", "spot:0,0,1:1,1,1"], &["spot"]),
+        (&["--light", "dir:0,0,0:1,1,1"], &["light"]),
+        (&["--light", "dir:0,0,1:1,-1,1"], &["light"]),
+        (&["--eye", "0,0,0", "--target", "0,0,0"], &["eye"]),
+        (&["--fov", "180"], &["fov"]),
+        (&["--mesh", "builtin:teapot"], &["teapot"]),
+        (&["--tonemap", "filmic"], &["filmic"]),
+    ];
+    for (extra, expected) in cases {
+        let args: Vec<&str> = base.iter().chain(extra.iter()).copied().collect();
+        assert_fails(dir.path(), &args, "x.png", expected);
+    }
+}
+
+#[test]
+fn brdf_command_cpu_and_gpu_agree_and_print_nine_digits() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = "nx,ny,nz,vx,vy,vz,lx,ly,lz\n\
+                 0,0,1,0,0,1,0,0,1\n\
+                 0,0,2,1,0,1,-1,0,1\n\
+                 0,1,0,0.3,1,0,-0.2,1,0.1\n\
+                 0,0,1,1,0,0.01,-1,0,0.02\n\
+                 0,0,1,0,0,-1,0,0,1\n";
+    std::fs::write(dir.path().join("dirs.csv"), input).unwrap();
+    let mut tables = Vec::new();
+    for backend in ["cpu", "gpu"] {
+        let out = shikki(
+            dir.path(),
+            &[
+                "brdf",
+                "--preset",
+                "rough-red",
+                "--input",
+                "dirs.csv",
+                "--backend",
+                backend,
+            ],
+        );
+        assert_ok(&out);
+        let text = String::from_utf8(out.stdout).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(lines.next(), Some("nx,ny,nz,vx,vy,vz,lx,ly,lz,r,g,b"));
+        let rows: Vec<Vec<f64>> = lines
+            .map(|l| {
+                for cell in l.split(',') {
+                    let digits = cell
+                        .split(['e', 'E'])
+                        .next()
+                        .unwrap()
+                        .replace(['-', '.'], "");
+                    assert!(
+                        digits.len() >= 9,
+                        "{cell} has fewer than 9 significant digits"
+                    );
+                }
+                l.split(',').map(|c| c.parse().unwrap()).collect()
+            })
+            .collect();
+        assert_eq!(rows.len(), 5);
+        // Vectors are printed normalised.
+        assert!((rows[1][5] - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-9);
+        // Below the horizon: exactly zero.
+        assert_eq!(&rows[4][9..], &[0.0, 0.0, 0.0]);
+        tables.push(rows);
+    }
+    for (cpu, gpu) in tables[0].iter().zip(&tables[1]) {
+        for c in 9..12 {
+            let rel = (cpu[c] - gpu[c]).abs() / cpu[c].abs().max(1e-6);
+            assert!(rel <= 1e-4, "cpu {} vs gpu {}", cpu[c], gpu[c]);
+        }
+    }
+}
+
+#[test]
+fn fresnel_command_prints_every_whole_degree() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = shikki(dir.path(), &["fresnel", "--preset", "smooth"]);
+    assert_ok(&out);
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "angle_deg,r,g,b");
+    assert_eq!(lines.len(), 92);
+    let first: Vec<f64> = lines[1].split(',').map(|c| c.parse().unwrap()).collect();
+    // ((n-1)/(n+1))² for n ≈ 1.51 at normal incidence.
+    assert_eq!(first[0], 0.0);
+    assert!((first[1] - 0.0414).abs() < 2e-3, "{first:?}");
+    let last: Vec<f64> = lines[91].split(',').map(|c| c.parse().unwrap()).collect();
+    assert_eq!(last, vec![90.0, 1.0, 1.0, 1.0]);
+}
+
+#[test]
+fn info_names_the_device() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = shikki(dir.path(), &["info"]);
+    assert_ok(&out);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("device:") && text.contains("Vulkan:"),
+        "{text}"
+    );
+}
+
+#[test]
+fn missing_vulkan_driver_gives_install_hint() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_shikki"))
+        .args(["render", "-o", "x.png", "--size", "8x8"])
+        .current_dir(dir.path())
+        .env("VK_DRIVER_FILES", dir.path().join("no-such-icd.json"))
+        .env("VK_ICD_FILENAMES", dir.path().join("no-such-icd.json"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(err.contains("mesa-vulkan-drivers"), "{err}");
+    assert!(!dir.path().join("x.png").exists());
+}

@@ -1,0 +1,96 @@
+//! Shared by the integration tests: a validated GPU context, a deterministic RNG, image
+//! comparison statistics and failure artefacts under target/test-output/.
+#![allow(dead_code)]
+
+use shikki::gpu::{ContextOptions, GpuContext};
+use shikki::output::{HdrImage, PngSettings, ToneCurve};
+use std::path::PathBuf;
+
+/// A context with VK_LAYER_KHRONOS_validation on: tests always run validated.
+pub fn validated_gpu() -> GpuContext {
+    let options = ContextOptions {
+        validation: true,
+        device_name: std::env::var("SHIKKI_DEVICE").ok(),
+    };
+    match GpuContext::new(&options) {
+        Ok(gpu) => gpu,
+        Err(e) => panic!("cannot create a validated Vulkan context: {e}"),
+    }
+}
+
+/// Fails the test if the validation layer said anything.
+pub fn assert_no_validation_messages(gpu: &GpuContext) {
+    let messages = gpu.take_validation_messages();
+    assert!(
+        messages.is_empty(),
+        "{} validation message(s):\n{}",
+        messages.len(),
+        messages.join("\n")
+    );
+}
+
+/// SplitMix64: deterministic, so a failure reproduces exactly.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Rng(seed)
+    }
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Where failing tests leave their pictures.
+pub fn artefact_dir() -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/test-output");
+    let _ = std::fs::create_dir_all(&dir);
+    dir
+}
+
+/// Writes `<name>-actual.png`, `<name>-expected.png` and `<name>-diff.png` (|a-e| × 10).
+pub fn write_failure_images(name: &str, actual: &HdrImage, expected: &HdrImage) {
+    let dir = artefact_dir();
+    let settings = PngSettings {
+        exposure_ev: 0.0,
+        tone_curve: ToneCurve::Aces,
+    };
+    let mut diff = HdrImage::new(actual.width, actual.height);
+    for (d, (a, e)) in diff
+        .pixels
+        .iter_mut()
+        .zip(actual.pixels.iter().zip(&expected.pixels))
+    {
+        *d = [
+            (a[0] - e[0]).abs() * 10.0,
+            (a[1] - e[1]).abs() * 10.0,
+            (a[2] - e[2]).abs() * 10.0,
+            1.0,
+        ];
+    }
+    for (suffix, image) in [("actual", actual), ("expected", expected), ("diff", &diff)] {
+        let path = dir.join(format!("{name}-{suffix}.png"));
+        if let Err(e) = shikki::output::write_image(&path, image, &settings) {
+            eprintln!("could not write {}: {e}", path.display());
+        }
+    }
+    eprintln!("wrote failure images to {}", dir.display());
+}
+
+/// The q-quantile (0..=1) of `values` (nearest rank).
+pub fn quantile(values: &mut [f64], q: f64) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    values.sort_by(|a, b| a.total_cmp(b));
+    let rank = ((q * values.len() as f64).ceil() as usize).clamp(1, values.len());
+    values[rank - 1]
+}
