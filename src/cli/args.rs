@@ -27,6 +27,10 @@ pub enum Command {
     Fresnel(MaterialArgs),
     /// Print the Vulkan device, driver and the limits shikki relies on.
     Info,
+    /// Fit the lacquer model to goniophotometer CSV or MERL data; write a material TOML.
+    Fit(super::fit::FitArgs),
+    /// Generate synthetic goniophotometer measurements from a material.
+    Synth(super::fit::SynthArgs),
 }
 
 /// A preset and `--set` overrides: the material of SPEC §2–3.

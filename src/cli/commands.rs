@@ -21,6 +21,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Brdf(args)) => brdf(args),
         Some(Command::Fresnel(args)) => fresnel(args),
         Some(Command::Info) => info(),
+        Some(Command::Fit(args)) => super::fit::run_fit(args),
+        Some(Command::Synth(args)) => super::fit::run_synth(args),
     }
 }
 

@@ -6,6 +6,7 @@
 mod args;
 mod commands;
 mod directions;
+mod fit;
 
 use clap::Parser;
 use std::process::ExitCode;
