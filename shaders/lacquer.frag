@@ -1,5 +1,6 @@
 #version 450
-// Lacquer surface: Σ over lights of f_r · E · (N·L), SPEC §2 and §4.
+// Lacquer surface: Σ over lights of f_r · E · (N·L) (SPEC §2, §4), plus the environment term
+// L_env = F(acos nv)·Lpre(R, β(nv)) + k_d·max(a + b·nv, 0)·g(r)·E_irr(N)/π (SPEC §4).
 
 #include "frame.glsl"
 #define FRESNEL_SET 0
@@ -10,6 +11,21 @@ layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
 
 layout(location = 0) out vec4 out_radiance;
+
+vec3 environment_light(LacquerParams p, vec3 n, vec3 v) {
+    vec2 nv2 = dot_compensated(n, v);
+    float nv = nv2.x + nv2.y;
+    if (nv <= 0.0) {
+        return vec3(0.0);
+    }
+    vec3 r = 2.0 * nv * n - v;
+    float beta = frame.view_blur.y
+        + (frame.view_blur.x - frame.view_blur.y) * pow(min(nv, 1.0), frame.view_blur.z);
+    vec3 specular = fresnel_table(angle_deg_of_cos(nv), p.fresnel_count)
+        * prefiltered_radiance(r, beta);
+    vec3 irradiance = textureLod(env_irradiance, n, 0.0).rgb;
+    return specular + view_dependent_diffuse(p, nv2) * irradiance;
+}
 
 void main() {
     LacquerParams p;
@@ -46,6 +62,9 @@ void main() {
             continue;
         }
         radiance += lacquer_brdf(p, n, v, l) * irradiance * nl;
+    }
+    if (frame.environment.x != 0) {
+        radiance += environment_light(p, n, v);
     }
     out_radiance = vec4(radiance, 1.0);
 }

@@ -17,7 +17,9 @@
 
 pub mod cli;
 pub mod compute;
+pub mod environment;
 pub mod error;
+pub mod fit;
 pub mod gpu;
 pub mod model;
 pub mod oracle;

@@ -2,6 +2,7 @@
 //! (SPEC §2–3) into the layouts `shaders/common/*.glsl` declare. The raster draw and the compute
 //! BRDF evaluator both use it, so a number the shader needs is packed once, not retyped.
 
+use crate::environment::params::ViewBlur;
 use crate::model::{BrdfParams, FresnelTable};
 use crate::raster::camera::Camera;
 use crate::raster::lights::{Light, MAX_LIGHTS};
@@ -55,11 +56,34 @@ pub struct FrameUniforms {
     pub light_count: [i32; 4],
     pub light_vector: [[f32; 4]; MAX_LIGHTS],
     pub light_color: [[f32; 4]; MAX_LIGHTS],
+    pub view_blur: [f32; 4],
+    pub environment: [i32; 4],
+    pub layer_beta: [[f32; 4]; MAX_ENV_LAYERS / 4],
+    pub camera_right: [f32; 4],
+    pub camera_up: [f32; 4],
+    pub camera_back: [f32; 4],
+    pub camera_params: [f32; 4],
+}
+
+/// Most environment layers a draw can sample (`MAX_ENV_LAYERS` in frame.glsl).
+pub const MAX_ENV_LAYERS: usize = crate::environment::params::MAX_LAYERS as usize;
+
+/// The environment as a draw sees it: whether there is one and the β of each layer.
+#[derive(Clone, Debug, Default)]
+pub struct EnvironmentUniforms {
+    pub enabled: bool,
+    pub layer_betas: Vec<f64>,
+    pub view_blur: ViewBlur,
+}
+
+fn vec4(v: glam::DVec3, w: f32) -> [f32; 4] {
+    [v.x as f32, v.y as f32, v.z as f32, w]
 }
 
 impl FrameUniforms {
-    /// Packs one draw's camera, lights and material. `lights.len()` must be ≤ MAX_LIGHTS (checked
-    /// by the renderer before this is called; extra lights are ignored here).
+    /// Packs one draw's camera, lights, material and environment. `lights.len()` must be
+    /// ≤ MAX_LIGHTS (checked by the renderer before this is called; extra lights are ignored here).
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         camera: &Camera,
         width: u32,
@@ -68,7 +92,19 @@ impl FrameUniforms {
         lights: &[Light],
         brdf: &BrdfParams,
         fresnel: &FresnelTable,
+        environment: &EnvironmentUniforms,
     ) -> Self {
+        let (right, up, forward) = camera.basis();
+        let mut layer_beta = [[0.0f32; 4]; MAX_ENV_LAYERS / 4];
+        for (k, beta) in environment
+            .layer_betas
+            .iter()
+            .take(MAX_ENV_LAYERS)
+            .enumerate()
+        {
+            layer_beta[k / 4][k % 4] = *beta as f32;
+        }
+        let blur = &environment.view_blur;
         let [material, albedo_count, material_lo] = material_vec4s(brdf, fresnel);
         let mut frame = FrameUniforms {
             view_projection: camera
@@ -86,6 +122,28 @@ impl FrameUniforms {
             light_count: [lights.len().min(MAX_LIGHTS) as i32, 0, 0, 0],
             light_vector: [[0.0; 4]; MAX_LIGHTS],
             light_color: [[0.0; 4]; MAX_LIGHTS],
+            view_blur: [
+                blur.beta_normal as f32,
+                blur.beta_grazing as f32,
+                blur.beta_power as f32,
+                0.0,
+            ],
+            environment: [
+                i32::from(environment.enabled),
+                environment.layer_betas.len().min(MAX_ENV_LAYERS) as i32,
+                0,
+                0,
+            ],
+            layer_beta,
+            camera_right: vec4(right, 0.0),
+            camera_up: vec4(up, 0.0),
+            camera_back: vec4(-forward, 0.0),
+            camera_params: [
+                (0.5 * camera.fov_deg.to_radians()).tan() as f32,
+                (f64::from(width) / f64::from(height)) as f32,
+                width as f32,
+                height as f32,
+            ],
         };
         for (i, light) in lights.iter().take(MAX_LIGHTS).enumerate() {
             let (vector, color) = match *light {

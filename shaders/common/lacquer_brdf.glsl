@@ -11,7 +11,7 @@
 #error "define FRESNEL_SET and FRESNEL_BINDING before including lacquer_brdf.glsl"
 #endif
 
-const float PI = 3.14159265358979323846;
+#include "math.glsl"
 
 // Knots of the Fresnel table: (angle_deg, r, g, b), angles strictly increasing from 0 to 90.
 layout(std430, set = FRESNEL_SET, binding = FRESNEL_BINDING) readonly buffer FresnelTable {
@@ -99,21 +99,10 @@ vec3 fresnel_table(float theta_deg, int count) {
     return mix(k0.yzw, k1.yzw, t);
 }
 
-// Angle in degrees of a cosine in [0, 1], for the Fresnel lookup. GLSL's acos has no precision
-// guarantee in Vulkan (it inherits atan's 4096 ulp bound) and lavapipe's is off by ~1e-4 rad, which
-// the steep part of the Fresnel curve turns into a visible error; Abramowitz & Stegun 4.4.46,
-// acos x = sqrt(1 - x)·Σ a_i x^i with |error| ≤ 2e-8 on [0, 1], is exact to fp32 rounding.
+// Angle in degrees of a cosine in [0, 1], for the Fresnel lookup (acos_unit: see math.glsl;
+// the steep part of the Fresnel curve turns GLSL acos's error into a visible one).
 float angle_deg_of_cos(float c) {
-    float x = clamp(c, 0.0, 1.0);
-    float p = -0.0012624911;
-    p = p * x + 0.0066700901;
-    p = p * x - 0.0170881256;
-    p = p * x + 0.0308918810;
-    p = p * x - 0.0501743046;
-    p = p * x + 0.0889789874;
-    p = p * x - 0.2145988016;
-    p = p * x + 1.5707963050;
-    return degrees(sqrt(1.0 - x) * p);
+    return degrees(acos_unit(c));
 }
 
 // Normalised Beckmann D. exp((nh² - 1)/(m² nh²)) is written with tan²α = |N×H|²/nh²: when nh → 1,

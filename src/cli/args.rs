@@ -1,6 +1,7 @@
 //! The argument surface (clap derive) and the small value parsers it needs.
 
 use crate::output::ToneCurve;
+use crate::raster::draw::Background;
 use crate::{Error, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use glam::DVec3;
@@ -27,6 +28,8 @@ pub enum Command {
     Fresnel(MaterialArgs),
     /// Print the Vulkan device, driver and the limits shikki relies on.
     Info,
+    /// Prefilter an environment on the GPU and write its layers and irradiance as EXR strips.
+    Prefilter(PrefilterArgs),
     /// Fit the lacquer model to goniophotometer CSV or MERL data; write a material TOML.
     Fit(super::fit::FitArgs),
     /// Generate synthetic goniophotometer measurements from a material.
@@ -98,6 +101,59 @@ pub struct RenderArgs {
     /// Tone curve for PNG output.
     #[arg(long, default_value = "aces", value_parser = parse_tone_curve)]
     pub tonemap: ToneCurve,
+    #[command(flatten)]
+    pub environment: EnvironmentArgs,
+    /// What fills the pixels the mesh does not cover: env (the sharp environment),
+    /// transparent, or a linear colour r,g,b.
+    #[arg(long, default_value = "env", value_parser = parse_background)]
+    pub background: Background,
+}
+
+/// The environment light (SPEC §4).
+#[derive(Debug, Clone, Args)]
+pub struct EnvironmentArgs {
+    /// Environment map: a .hdr or .exr file (equirectangular), builtin:studio, or none.
+    #[arg(long = "env", default_value = "builtin:studio")]
+    pub env: String,
+    /// Multiplies the environment's radiance.
+    #[arg(long = "env-intensity", default_value_t = 1.0)]
+    pub intensity: f64,
+    /// Turns the environment about +Y, in degrees.
+    #[arg(
+        long = "env-rotation",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    pub rotation_deg: f64,
+}
+
+#[derive(Debug, Args)]
+pub struct PrefilterArgs {
+    /// Environment map: a .hdr or .exr file, or builtin:studio.
+    pub env: String,
+    /// Output directory (created if missing) for layer_<k>.exr, irradiance.exr and preview.png.
+    #[arg(short = 'o', long = "output")]
+    pub output: PathBuf,
+    /// Face size of layer 0 (a power of two); default from the source width.
+    #[arg(long = "face-size")]
+    pub face_size: Option<u32>,
+    /// Number of layers K, including the sharp layer 0.
+    #[arg(long, default_value_t = 8)]
+    pub layers: u32,
+    #[arg(long = "beta-min", default_value_t = 0.02)]
+    pub beta_min: f64,
+    #[arg(long = "beta-max", default_value_t = 1.0)]
+    pub beta_max: f64,
+    /// Multiplies the environment's radiance.
+    #[arg(long = "env-intensity", default_value_t = 1.0)]
+    pub intensity: f64,
+    /// Turns the environment about +Y, in degrees.
+    #[arg(
+        long = "env-rotation",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    pub rotation_deg: f64,
 }
 
 impl Default for RenderArgs {
@@ -123,7 +179,30 @@ impl Default for RenderArgs {
                 samples: 4,
                 exposure: 0.0,
                 tonemap: ToneCurve::Aces,
+                environment: EnvironmentArgs {
+                    env: "builtin:studio".into(),
+                    intensity: 1.0,
+                    rotation_deg: 0.0,
+                },
+                background: Background::Environment,
             },
+        }
+    }
+}
+
+/// `env`, `transparent` or `r,g,b` (linear, finite, ≥ 0).
+pub fn parse_background(s: &str) -> std::result::Result<Background, String> {
+    match s.trim().to_lowercase().as_str() {
+        "env" => Ok(Background::Environment),
+        "transparent" => Ok(Background::Transparent),
+        _ => {
+            let c = parse_vec3("background", s).map_err(|_| {
+                format!("background {s:?}: expected env, transparent or a linear colour r,g,b")
+            })?;
+            if c.min_element() < 0.0 {
+                return Err(format!("background {s:?}: colour components must be ≥ 0"));
+            }
+            Ok(Background::Color([c.x as f32, c.y as f32, c.z as f32]))
         }
     }
 }

@@ -1,8 +1,14 @@
 //! What each subcommand does, in terms of the library.
 
-use super::args::{Backend, BrdfArgs, Cli, Command, MaterialArgs, RenderArgs};
+use super::args::{
+    Backend, BrdfArgs, Cli, Command, EnvironmentArgs, MaterialArgs, PrefilterArgs, RenderArgs,
+};
 use super::directions;
 use crate::compute::BrdfEvaluator;
+use crate::environment::gpu::{GpuEnvironment, GpuPrefilter};
+use crate::environment::load::load_environment;
+use crate::environment::params::ViewBlur;
+use crate::environment::PrefilterParams;
 use crate::gpu::{ContextOptions, GpuContext};
 use crate::model::{lacquer_brdf, LacquerMaterial};
 use crate::output::{self, PngSettings};
@@ -21,6 +27,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Brdf(args)) => brdf(args),
         Some(Command::Fresnel(args)) => fresnel(args),
         Some(Command::Info) => info(),
+        Some(Command::Prefilter(args)) => prefilter(args),
         Some(Command::Fit(args)) => super::fit::run_fit(args),
         Some(Command::Synth(args)) => super::fit::run_synth(args),
     }
@@ -115,6 +122,7 @@ fn render_image(args: RenderArgs) -> Result<()> {
     output::preflight_output(&args.output)?;
 
     let gpu = GpuContext::new(&ContextOptions::from_env())?;
+    let environment = prepare_environment(&gpu, &args.environment)?;
     let mut renderer = LacquerRenderer::new();
     let image = renderer.render(
         &gpu,
@@ -124,6 +132,9 @@ fn render_image(args: RenderArgs) -> Result<()> {
             lights: &lights,
             brdf: &brdf,
             fresnel: &fresnel,
+            environment: environment.as_ref(),
+            view_blur: ViewBlur::of(&material),
+            background: args.background,
         },
         &RenderSettings {
             width: args.size.0,
@@ -141,6 +152,80 @@ fn render_image(args: RenderArgs) -> Result<()> {
         args.samples,
         args.material.preset,
         gpu.info().name
+    );
+    Ok(())
+}
+
+/// Loads and prefilters the environment on the GPU (None for `--env none`), warning once about
+/// replaced pixels.
+fn prepare_environment(gpu: &GpuContext, args: &EnvironmentArgs) -> Result<Option<GpuEnvironment>> {
+    if args.env.trim().eq_ignore_ascii_case("none") {
+        return Ok(None);
+    }
+    let loaded = load_environment(&args.env)?;
+    warn_replaced(&loaded.source, loaded.replaced_pixels);
+    let params = PrefilterParams::for_source_width(loaded.image.width);
+    let env = GpuPrefilter::new(gpu)?.run(
+        gpu,
+        &loaded.image,
+        &params,
+        args.intensity,
+        args.rotation_deg,
+    )?;
+    Ok(Some(env))
+}
+
+fn warn_replaced(source: &str, replaced: usize) {
+    if replaced > 0 {
+        eprintln!(
+            "warning: {source}: {replaced} pixel value(s) were NaN, infinite or negative and \
+             were replaced by 0"
+        );
+    }
+}
+
+fn prefilter(args: PrefilterArgs) -> Result<()> {
+    let loaded = load_environment(&args.env)?;
+    warn_replaced(&loaded.source, loaded.replaced_pixels);
+    let mut params = PrefilterParams::for_source_width(loaded.image.width);
+    if let Some(face) = args.face_size {
+        params.face_size = face;
+    }
+    params.layers = args.layers;
+    params.beta_min = args.beta_min;
+    params.beta_max = args.beta_max;
+    params.validate()?;
+    std::fs::create_dir_all(&args.output).map_err(|e| Error::Write {
+        path: args.output.clone(),
+        message: format!("cannot create the output directory: {e}"),
+    })?;
+    let gpu = GpuContext::new(&ContextOptions::from_env())?;
+    let env = GpuPrefilter::new(&gpu)?.run(
+        &gpu,
+        &loaded.image,
+        &params,
+        args.intensity,
+        args.rotation_deg,
+    )?;
+    let cubes = env.read_back(&gpu)?;
+    gpu.check_validation()?;
+    let linear = PngSettings::default();
+    for (k, layer) in cubes.layers.iter().enumerate() {
+        let path = args.output.join(format!("layer_{k}.exr"));
+        output::write_image(&path, &layer.to_strip(), &linear)?;
+    }
+    output::write_image(
+        &args.output.join("irradiance.exr"),
+        &cubes.irradiance.to_strip(),
+        &linear,
+    )?;
+    let preview = crate::environment::preview::preview_image(&cubes)?;
+    output::atomic::write_atomically(&args.output.join("preview.png"), &preview)?;
+    eprintln!(
+        "wrote {} layers (face {}), irradiance and preview.png to {}",
+        cubes.layers.len(),
+        params.face_size,
+        args.output.display()
     );
     Ok(())
 }

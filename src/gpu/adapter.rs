@@ -21,6 +21,9 @@ pub struct AdapterInfo {
     pub framebuffer_color_sample_counts: Vec<u32>,
     pub timestamp_period_ns: f32,
     pub timestamp_compute_and_graphics: bool,
+    /// Double precision in shaders (enabled when present; the prefilter uses it for exact
+    /// source coordinates).
+    pub shader_float64: bool,
 }
 
 pub(crate) struct ChosenAdapter {
@@ -152,5 +155,10 @@ fn describe(instance: &ash::Instance, device: vk::PhysicalDevice) -> AdapterInfo
         ),
         timestamp_period_ns: limits.timestamp_period,
         timestamp_compute_and_graphics: limits.timestamp_compute_and_graphics == vk::TRUE,
+        shader_float64: {
+            // SAFETY: plain query on a valid physical device.
+            let features = unsafe { instance.get_physical_device_features(device) };
+            features.shader_float64 == vk::TRUE
+        },
     }
 }

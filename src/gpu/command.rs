@@ -178,6 +178,12 @@ impl Recorder<'_> {
         }
     }
 
+    /// Draws `vertex_count` vertices with no vertex buffer (e.g. a full-screen triangle).
+    pub fn draw(&mut self, vertex_count: u32) {
+        // SAFETY: recording inside a rendering pass with a pipeline bound.
+        unsafe { self.device.cmd_draw(self.cmd, vertex_count, 1, 0, 0) };
+    }
+
     pub fn draw_indexed(&mut self, index_count: u32) {
         // SAFETY: recording inside a rendering pass with a pipeline and buffers bound.
         unsafe {
@@ -248,6 +254,49 @@ impl Recorder<'_> {
                 image.raw,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                 buffer.raw,
+                std::slice::from_ref(&region),
+            )
+        };
+    }
+
+    /// Copies all of `src` to the start of `dst`.
+    pub fn copy_buffer(&mut self, src: &Buffer, dst: &Buffer) {
+        let region = vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: 0,
+            size: src.size().min(dst.size()),
+        };
+        // SAFETY: recording; both buffers are live and the region fits both.
+        unsafe {
+            self.device
+                .cmd_copy_buffer(self.cmd, src.raw, dst.raw, std::slice::from_ref(&region))
+        };
+    }
+
+    /// Fills every layer of `image` (in TransferDst layout) from `buffer`, tightly packed layer
+    /// after layer, row 0 first: the inverse of `copy_image_to_buffer`.
+    pub fn copy_buffer_to_image(&mut self, buffer: &Buffer, image: &Image) {
+        let desc = image.desc();
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .mip_level(0)
+                    .base_array_layer(0)
+                    .layer_count(desc.layers),
+            )
+            .image_extent(vk::Extent3D {
+                width: desc.width,
+                height: desc.height,
+                depth: 1,
+            });
+        // SAFETY: recording; the buffer holds image.byte_size() bytes and both are live.
+        unsafe {
+            self.device.cmd_copy_buffer_to_image(
+                self.cmd,
+                buffer.raw,
+                image.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                 std::slice::from_ref(&region),
             )
         };

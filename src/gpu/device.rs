@@ -84,8 +84,11 @@ fn create_device(
     let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
         .dynamic_rendering(true)
         .synchronization2(true);
+    let features =
+        vk::PhysicalDeviceFeatures::default().shader_float64(adapter.info.shader_float64);
     let create_info = vk::DeviceCreateInfo::default()
         .queue_create_infos(std::slice::from_ref(&queue_info))
+        .enabled_features(&features)
         .push_next(&mut features13);
     // SAFETY: the physical device comes from this instance; create_info lives until return.
     let device = unsafe {

@@ -15,7 +15,13 @@
 //!   wait plus a barrier to `Access::HostRead` makes device writes visible to the host.
 //! * **Validation.** With [`ContextOptions::validation`], VK_LAYER_KHRONOS_validation is enabled
 //!   and every warning/error message is collected; tests fail on any (`check_validation`).
-//! * **Driver quirks.** None needed so far on lavapipe (Mesa 22.3); add them here, named.
+//! * **Driver quirks.**
+//!   - lavapipe (llvmpipe, Mesa 22.3): a loop is cut off after 65535 iterations per invocation (the
+//!     gallivm loop limiter), silently. Compute shaders keep every loop's trip count below that:
+//!     the prefilter visits only the cube faces a lobe can reach, and `params.rs` bounds the
+//!     irradiance source at 6·32² texels.
+//!   - GLSL `acos`/`atan` have no useful precision guarantee in Vulkan and lavapipe's acos is off by
+//!     ~1e-4 rad: shaders use `common/math.glsl` instead.
 
 mod adapter;
 mod buffer;

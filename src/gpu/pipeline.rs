@@ -20,16 +20,25 @@ pub enum BindingKind {
     StorageImage,
 }
 
-/// One binding of set 0.
+/// One binding of set 0 (an array of `count` descriptors when count > 1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Binding {
     pub index: u32,
     pub kind: BindingKind,
+    pub count: u32,
 }
 
 impl Binding {
     pub const fn new(index: u32, kind: BindingKind) -> Self {
-        Self { index, kind }
+        Self {
+            index,
+            kind,
+            count: 1,
+        }
+    }
+
+    pub const fn array(index: u32, kind: BindingKind, count: u32) -> Self {
+        Self { index, kind, count }
     }
 }
 
@@ -65,7 +74,7 @@ impl PipelineLayout {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b.index)
                     .descriptor_type(descriptor_type(b.kind))
-                    .descriptor_count(1)
+                    .descriptor_count(b.count)
                     .stage_flags(stages)
             })
             .collect();
@@ -221,10 +230,12 @@ pub struct GraphicsPipelineDesc<'a> {
     pub color_format: Format,
     pub depth_format: Format,
     pub samples: u32,
+    /// Depth test (less) and write; off for full-screen passes such as the background.
+    pub depth_test: bool,
 }
 
 /// A graphics pipeline for dynamic rendering (no render pass objects), with dynamic viewport and
-/// scissor, depth test less, no culling (the BRDF is zero for back faces anyway: nv <= 0).
+/// scissor, optional depth test (less), no culling (the BRDF is zero for back faces: nv <= 0).
 pub struct GraphicsPipeline {
     pub(crate) raw: vk::Pipeline,
     pub(crate) layout: PipelineLayout,
@@ -273,9 +284,14 @@ impl GraphicsPipeline {
                     .offset(a.offset)
             })
             .collect();
-        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
-            .vertex_binding_descriptions(std::slice::from_ref(&binding))
-            .vertex_attribute_descriptions(&attributes);
+        // No attributes: a pass that makes its vertices from gl_VertexIndex.
+        let vertex_input = if attributes.is_empty() {
+            vk::PipelineVertexInputStateCreateInfo::default()
+        } else {
+            vk::PipelineVertexInputStateCreateInfo::default()
+                .vertex_binding_descriptions(std::slice::from_ref(&binding))
+                .vertex_attribute_descriptions(&attributes)
+        };
         let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
             .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
         let viewport = vk::PipelineViewportStateCreateInfo::default()
@@ -289,8 +305,8 @@ impl GraphicsPipeline {
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(conv::sample_count_flag(desc.samples));
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(true)
-            .depth_write_enable(true)
+            .depth_test_enable(desc.depth_test)
+            .depth_write_enable(desc.depth_test)
             .depth_compare_op(vk::CompareOp::LESS);
         let blend_attachment = vk::PipelineColorBlendAttachmentState::default()
             .blend_enable(false)
@@ -346,6 +362,8 @@ impl Drop for GraphicsPipeline {
 pub enum Resource<'a> {
     Buffer(&'a Buffer),
     SampledImage(&'a Image, &'a Sampler),
+    /// Every element of an array binding, in order; its length must equal the binding's count.
+    SampledImages(Vec<&'a Image>, &'a Sampler),
     StorageImage(&'a Image),
 }
 
@@ -367,7 +385,7 @@ impl DescriptorSet {
             .iter()
             .map(|b| vk::DescriptorPoolSize {
                 ty: descriptor_type(b.kind),
-                descriptor_count: 1,
+                descriptor_count: b.count,
             })
             .collect();
         let info = vk::DescriptorPoolCreateInfo::default()
@@ -397,7 +415,12 @@ impl DescriptorSet {
         resources: &[(u32, Resource<'_>)],
     ) -> Result<(), GpuError> {
         let mut buffer_infos = Vec::new();
-        let mut image_infos = Vec::new();
+        let mut image_infos: Vec<(u32, Vec<vk::DescriptorImageInfo>)> = Vec::new();
+        let sampled = |image: &Image, sampler: &Sampler| vk::DescriptorImageInfo {
+            sampler: sampler.raw,
+            image_view: image.view,
+            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+        };
         for (index, resource) in resources {
             match resource {
                 Resource::Buffer(b) => buffer_infos.push((
@@ -408,30 +431,29 @@ impl DescriptorSet {
                         range: vk::WHOLE_SIZE,
                     },
                 )),
-                Resource::SampledImage(image, sampler) => image_infos.push((
+                Resource::SampledImage(image, sampler) => {
+                    image_infos.push((*index, vec![sampled(image, sampler)]))
+                }
+                Resource::SampledImages(images, sampler) => image_infos.push((
                     *index,
-                    vk::DescriptorImageInfo {
-                        sampler: sampler.raw,
-                        image_view: image.view,
-                        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    },
+                    images.iter().map(|image| sampled(image, sampler)).collect(),
                 )),
                 Resource::StorageImage(image) => image_infos.push((
                     *index,
-                    vk::DescriptorImageInfo {
+                    vec![vk::DescriptorImageInfo {
                         sampler: vk::Sampler::null(),
                         image_view: image.storage_view.unwrap_or(image.view),
                         image_layout: vk::ImageLayout::GENERAL,
-                    },
+                    }],
                 )),
             }
         }
-        let kind_of = |index: u32| -> Result<vk::DescriptorType, GpuError> {
+        let binding_of = |index: u32| -> Result<Binding, GpuError> {
             layout
                 .bindings
                 .iter()
                 .find(|b| b.index == index)
-                .map(|b| descriptor_type(b.kind))
+                .copied()
                 .ok_or(GpuError::Limit {
                     what: "descriptor binding index (not in the pipeline layout)",
                     value: u64::from(index),
@@ -444,17 +466,25 @@ impl DescriptorSet {
                 vk::WriteDescriptorSet::default()
                     .dst_set(self.raw)
                     .dst_binding(*index)
-                    .descriptor_type(kind_of(*index)?)
+                    .descriptor_type(descriptor_type(binding_of(*index)?.kind))
                     .buffer_info(std::slice::from_ref(info)),
             );
         }
-        for (index, info) in &image_infos {
+        for (index, infos) in &image_infos {
+            let binding = binding_of(*index)?;
+            if infos.len() != binding.count as usize {
+                return Err(GpuError::Limit {
+                    what: "descriptors for an array binding (must equal its count)",
+                    value: infos.len() as u64,
+                    limit: u64::from(binding.count),
+                });
+            }
             writes.push(
                 vk::WriteDescriptorSet::default()
                     .dst_set(self.raw)
                     .dst_binding(*index)
-                    .descriptor_type(kind_of(*index)?)
-                    .image_info(std::slice::from_ref(info)),
+                    .descriptor_type(descriptor_type(binding.kind))
+                    .image_info(infos),
             );
         }
         // SAFETY: the set is not in use by any pending command buffer; infos outlive the call.

@@ -9,6 +9,7 @@ pub mod brdf;
 pub mod cie;
 pub mod fresnel;
 pub mod material;
+pub mod material_file;
 pub mod spectral;
 
 pub use brdf::{lacquer_brdf, BrdfParams};

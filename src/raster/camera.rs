@@ -78,7 +78,7 @@ impl Camera {
     }
 
     /// The camera frame in world space: (right = +X_cam, up = +Y_cam, forward = -Z_cam).
-    fn basis(&self) -> (DVec3, DVec3, DVec3) {
+    pub fn basis(&self) -> (DVec3, DVec3, DVec3) {
         let forward = (self.target - self.eye).normalize();
         let right = forward.cross(self.up).normalize();
         let up = right.cross(forward);

@@ -1,19 +1,25 @@
 //! The GPU draw: a mesh shaded with the lacquer BRDF (lacquer.frag) into an offscreen HDR target,
-//! resolved (MSAA) and read back as an [`HdrImage`].
+//! lit by point/directional lights and the prefiltered environment, over a background (the sharp
+//! environment, a colour, or transparent), resolved (MSAA) and read back as an [`HdrImage`].
 //!
-//! Per draw: upload mesh, uniforms and Fresnel knots → transition targets → render → resolve →
-//! copy to a readback buffer → barrier to host. Pipelines are made once per sample count and kept.
+//! Per draw: upload mesh, uniforms and Fresnel knots → transition targets → background pass →
+//! mesh pass → resolve → copy to a readback buffer → barrier to host. Pipelines, the sampler and
+//! the black stand-in environment are made once and kept.
 
+use crate::environment::gpu::{GpuEnvironment, GpuPrefilter};
+use crate::environment::params::ViewBlur;
+use crate::environment::{Equirect, PrefilterParams};
 use crate::gpu::{
     Access, Binding, BindingKind, BufferDesc, BufferUsage, Format, GpuContext, GraphicsPipeline,
-    GraphicsPipelineDesc, ImageDesc, ImageUse, Layout, RenderTargets, Resource, VertexAttribute,
+    GraphicsPipelineDesc, Image, ImageDesc, ImageUse, Layout, RenderTargets, Resource, Sampler,
+    VertexAttribute,
 };
 use crate::model::{BrdfParams, FresnelTable};
 use crate::output::HdrImage;
 use crate::raster::camera::Camera;
 use crate::raster::lights::{Light, MAX_LIGHTS};
 use crate::raster::mesh::Mesh;
-use crate::shading::{self, FrameUniforms};
+use crate::shading::{self, EnvironmentUniforms, FrameUniforms, MAX_ENV_LAYERS};
 use crate::{Error, Result};
 use std::collections::hash_map::Entry;
 use std::collections::HashMap;
@@ -39,6 +45,18 @@ impl Default for RenderSettings {
     }
 }
 
+/// What fills the pixels the mesh does not cover.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum Background {
+    /// Alpha 0 (coverage): compose the render over anything later.
+    #[default]
+    Transparent,
+    /// An opaque colour (linear radiance).
+    Color([f32; 3]),
+    /// The sharp environment (layer 0) along each pixel's primary ray; black without one.
+    Environment,
+}
+
 /// What one draw shows.
 pub struct DrawScene<'a> {
     pub mesh: &'a Mesh,
@@ -46,11 +64,17 @@ pub struct DrawScene<'a> {
     pub lights: &'a [Light],
     pub brdf: &'a BrdfParams,
     pub fresnel: &'a FresnelTable,
+    /// The prefiltered environment lighting the mesh, if any.
+    pub environment: Option<&'a GpuEnvironment>,
+    pub view_blur: ViewBlur,
+    pub background: Background,
 }
 
-const BINDINGS: [Binding; 2] = [
+const BINDINGS: [Binding; 4] = [
     Binding::new(0, BindingKind::UniformBuffer),
     Binding::new(1, BindingKind::StorageBuffer),
+    Binding::array(2, BindingKind::SampledImage, MAX_ENV_LAYERS as u32),
+    Binding::new(3, BindingKind::SampledImage),
 ];
 
 /// Interleaved position (xyz) + normal (xyz), f32.
@@ -68,10 +92,18 @@ const VERTEX_ATTRIBUTES: [VertexAttribute; 2] = [
     },
 ];
 
+/// The two pipelines of one sample count.
+struct Pipelines {
+    lacquer: GraphicsPipeline,
+    background: GraphicsPipeline,
+}
+
 /// The lacquer raster renderer; keeps its pipelines between draws.
 #[derive(Default)]
 pub struct LacquerRenderer {
-    pipelines: HashMap<u32, GraphicsPipeline>,
+    pipelines: HashMap<u32, Pipelines>,
+    sampler: Option<Sampler>,
+    black_environment: Option<GpuEnvironment>,
 }
 
 impl LacquerRenderer {
@@ -79,24 +111,66 @@ impl LacquerRenderer {
         Self::default()
     }
 
-    fn pipeline(&mut self, gpu: &GpuContext, samples: u32) -> Result<&GraphicsPipeline> {
+    fn ensure_pipelines(&mut self, gpu: &GpuContext, samples: u32) -> Result<()> {
         match self.pipelines.entry(samples) {
-            Entry::Occupied(entry) => Ok(entry.into_mut()),
+            Entry::Occupied(_) => Ok(()),
             Entry::Vacant(entry) => {
-                let pipeline = gpu.create_graphics_pipeline(&GraphicsPipelineDesc {
-                    name: "lacquer",
-                    vertex_spirv: crate::gpu::shaders::MESH_VERT,
-                    fragment_spirv: crate::gpu::shaders::LACQUER_FRAG,
-                    bindings: &BINDINGS,
-                    vertex_stride: VERTEX_STRIDE,
-                    vertex_attributes: &VERTEX_ATTRIBUTES,
-                    color_format: Format::Rgba32Float,
-                    depth_format: Format::Depth32Float,
-                    samples,
-                })?;
-                Ok(entry.insert(pipeline))
+                use crate::gpu::shaders::*;
+                let desc = |name, vertex_spirv, fragment_spirv, attributes, depth_test| {
+                    GraphicsPipelineDesc {
+                        name,
+                        vertex_spirv,
+                        fragment_spirv,
+                        bindings: &BINDINGS,
+                        vertex_stride: VERTEX_STRIDE,
+                        vertex_attributes: attributes,
+                        color_format: Format::Rgba32Float,
+                        depth_format: Format::Depth32Float,
+                        samples,
+                        depth_test,
+                    }
+                };
+                let lacquer = gpu.create_graphics_pipeline(&desc(
+                    "lacquer",
+                    MESH_VERT,
+                    LACQUER_FRAG,
+                    &VERTEX_ATTRIBUTES,
+                    true,
+                ))?;
+                let background = gpu.create_graphics_pipeline(&desc(
+                    "background",
+                    BACKGROUND_VERT,
+                    BACKGROUND_FRAG,
+                    &[],
+                    false,
+                ))?;
+                entry.insert(Pipelines {
+                    lacquer,
+                    background,
+                });
+                Ok(())
             }
         }
+    }
+
+    /// Made once: the sampler and a black environment bound when a draw has none (every binding
+    /// the shaders declare must hold a valid descriptor).
+    fn prepare_shared(&mut self, gpu: &GpuContext) -> Result<()> {
+        if self.sampler.is_none() {
+            self.sampler = Some(gpu.create_sampler()?);
+        }
+        if self.black_environment.is_none() {
+            let black = Equirect::constant(2, 1, [0.0; 3]);
+            let params = PrefilterParams {
+                face_size: 8,
+                layers: 2,
+                beta_min: 1.0,
+                beta_max: 1.0,
+            };
+            let env = GpuPrefilter::new(gpu)?.run(gpu, &black, &params, 1.0, 0.0)?;
+            self.black_environment = Some(env);
+        }
+        Ok(())
     }
 
     /// Renders `scene` and reads the image back (linear radiance, alpha = coverage, row 0 top).
@@ -107,106 +181,147 @@ impl LacquerRenderer {
         settings: &RenderSettings,
     ) -> Result<HdrImage> {
         validate(gpu, scene, settings)?;
-        let RenderSettings {
-            width,
-            height,
-            samples,
-        } = *settings;
-        let pipeline = self.pipeline(gpu, samples)?;
-
-        let vertices: Vec<[f32; 6]> = scene
-            .mesh
-            .positions
-            .iter()
-            .zip(&scene.mesh.normals)
-            .map(|(p, n)| [p[0], p[1], p[2], n[0], n[1], n[2]])
-            .collect();
-        let mut vertex_buf = gpu.create_buffer(BufferDesc::upload(
-            "mesh vertices",
-            (vertices.len() * VERTEX_STRIDE as usize) as u64,
-            BufferUsage::VERTEX,
-        ))?;
-        vertex_buf.write(&vertices)?;
-        let mut index_buf = gpu.create_buffer(BufferDesc::upload(
-            "mesh indices",
-            (scene.mesh.indices.len() * 4) as u64,
-            BufferUsage::INDEX,
-        ))?;
-        index_buf.write(&scene.mesh.indices)?;
-
-        let frame = FrameUniforms::new(
-            scene.camera,
-            width,
-            height,
-            scene.mesh.bounding_radius(),
-            scene.lights,
-            scene.brdf,
-            scene.fresnel,
-        );
-        let mut frame_buf = gpu.create_buffer(BufferDesc::upload(
-            "frame uniforms",
-            std::mem::size_of::<FrameUniforms>() as u64,
-            BufferUsage::UNIFORM,
-        ))?;
-        frame_buf.write(std::slice::from_ref(&frame))?;
-        let knots = shading::fresnel_knots(scene.fresnel);
-        let mut knots_buf = gpu.create_buffer(BufferDesc::upload(
-            "fresnel knots",
-            (knots.len() * 16) as u64,
-            BufferUsage::STORAGE,
-        ))?;
-        knots_buf.write(&knots)?;
-        let set = gpu.create_descriptor_set(
-            pipeline.layout(),
-            &[
-                (0, Resource::Buffer(&frame_buf)),
-                (1, Resource::Buffer(&knots_buf)),
-            ],
-        )?;
-
-        let color = gpu.create_image(ImageDesc::color_target("color", width, height, samples))?;
-        let resolve = if samples > 1 {
-            Some(gpu.create_image(ImageDesc::color_target("resolve", width, height, 1))?)
-        } else {
-            None
-        };
-        let depth = gpu.create_image(ImageDesc::depth_target("depth", width, height, samples))?;
-        let output = resolve.as_ref().unwrap_or(&color);
-        let readback = gpu.create_buffer(BufferDesc::readback("readback", output.byte_size()))?;
-
-        let undefined = ImageUse::new(Access::Nothing, Layout::Undefined);
-        let color_attachment = ImageUse::new(Access::ColorAttachmentWrite, Layout::ColorAttachment);
-        let depth_attachment = ImageUse::new(Access::DepthAttachmentWrite, Layout::DepthAttachment);
-        let transfer_src = ImageUse::new(Access::TransferRead, Layout::TransferSrc);
-        let index_count = scene.mesh.indices.len() as u32;
-        gpu.submit_and_wait(|rec| {
-            rec.image_barrier(&color, undefined, color_attachment);
-            if let Some(resolve) = &resolve {
-                rec.image_barrier(resolve, undefined, color_attachment);
-            }
-            rec.image_barrier(&depth, undefined, depth_attachment);
-            rec.begin_rendering(&RenderTargets {
-                color: &color,
-                resolve: resolve.as_ref(),
-                depth: &depth,
-                clear_color: [0.0, 0.0, 0.0, 0.0],
-            });
-            rec.bind_graphics(pipeline, &set);
-            rec.bind_mesh_buffers(&vertex_buf, &index_buf);
-            rec.draw_indexed(index_count);
-            rec.end_rendering();
-            rec.image_barrier(output, color_attachment, transfer_src);
-            rec.copy_image_to_buffer(output, &readback);
-            rec.memory_barrier(Access::TransferWrite, Access::HostRead);
-            Ok(())
-        })?;
-        let pixels: Vec<[f32; 4]> = readback.read()?;
-        Ok(HdrImage {
-            width,
-            height,
-            pixels,
-        })
+        self.prepare_shared(gpu)?;
+        self.ensure_pipelines(gpu, settings.samples)?;
+        let internal = || Error::invalid("renderer", "uninitialised", "internal error");
+        let pipelines = self.pipelines.get(&settings.samples).ok_or_else(internal)?;
+        let sampler = self.sampler.as_ref().ok_or_else(internal)?;
+        let black = self.black_environment.as_ref().ok_or_else(internal)?;
+        let environment = scene.environment.unwrap_or(black);
+        draw(gpu, pipelines, sampler, environment, scene, settings)
     }
+}
+
+fn draw(
+    gpu: &GpuContext,
+    pipelines: &Pipelines,
+    sampler: &Sampler,
+    environment: &GpuEnvironment,
+    scene: &DrawScene<'_>,
+    settings: &RenderSettings,
+) -> Result<HdrImage> {
+    let RenderSettings {
+        width,
+        height,
+        samples,
+    } = *settings;
+    let vertices: Vec<[f32; 6]> = scene
+        .mesh
+        .positions
+        .iter()
+        .zip(&scene.mesh.normals)
+        .map(|(p, n)| [p[0], p[1], p[2], n[0], n[1], n[2]])
+        .collect();
+    let mut vertex_buf = gpu.create_buffer(BufferDesc::upload(
+        "mesh vertices",
+        (vertices.len() * VERTEX_STRIDE as usize) as u64,
+        BufferUsage::VERTEX,
+    ))?;
+    vertex_buf.write(&vertices)?;
+    let mut index_buf = gpu.create_buffer(BufferDesc::upload(
+        "mesh indices",
+        (scene.mesh.indices.len() * 4) as u64,
+        BufferUsage::INDEX,
+    ))?;
+    index_buf.write(&scene.mesh.indices)?;
+
+    let env_uniforms = EnvironmentUniforms {
+        enabled: scene.environment.is_some(),
+        layer_betas: environment.betas.clone(),
+        view_blur: scene.view_blur,
+    };
+    let frame = FrameUniforms::new(
+        scene.camera,
+        width,
+        height,
+        scene.mesh.bounding_radius(),
+        scene.lights,
+        scene.brdf,
+        scene.fresnel,
+        &env_uniforms,
+    );
+    let mut frame_buf = gpu.create_buffer(BufferDesc::upload(
+        "frame uniforms",
+        std::mem::size_of::<FrameUniforms>() as u64,
+        BufferUsage::UNIFORM,
+    ))?;
+    frame_buf.write(std::slice::from_ref(&frame))?;
+    let knots = shading::fresnel_knots(scene.fresnel);
+    let mut knots_buf = gpu.create_buffer(BufferDesc::upload(
+        "fresnel knots",
+        (knots.len() * 16) as u64,
+        BufferUsage::STORAGE,
+    ))?;
+    knots_buf.write(&knots)?;
+
+    // Unused array slots repeat the last layer: every element needs a valid descriptor.
+    let mut layer_images: Vec<&Image> = environment.layers.iter().collect();
+    while layer_images.len() < MAX_ENV_LAYERS {
+        let last = layer_images[layer_images.len() - 1];
+        layer_images.push(last);
+    }
+    layer_images.truncate(MAX_ENV_LAYERS);
+    let resources = || {
+        vec![
+            (0, Resource::Buffer(&frame_buf)),
+            (1, Resource::Buffer(&knots_buf)),
+            (2, Resource::SampledImages(layer_images.clone(), sampler)),
+            (3, Resource::SampledImage(&environment.irradiance, sampler)),
+        ]
+    };
+    let lacquer_set = gpu.create_descriptor_set(pipelines.lacquer.layout(), &resources())?;
+    let background_set = gpu.create_descriptor_set(pipelines.background.layout(), &resources())?;
+
+    let color = gpu.create_image(ImageDesc::color_target("color", width, height, samples))?;
+    let resolve = if samples > 1 {
+        Some(gpu.create_image(ImageDesc::color_target("resolve", width, height, 1))?)
+    } else {
+        None
+    };
+    let depth = gpu.create_image(ImageDesc::depth_target("depth", width, height, samples))?;
+    let output = resolve.as_ref().unwrap_or(&color);
+    let readback = gpu.create_buffer(BufferDesc::readback("readback", output.byte_size()))?;
+
+    let clear_color = match scene.background {
+        Background::Transparent | Background::Environment => [0.0, 0.0, 0.0, 0.0],
+        Background::Color([r, g, b]) => [r, g, b, 1.0],
+    };
+    let undefined = ImageUse::new(Access::Nothing, Layout::Undefined);
+    let color_attachment = ImageUse::new(Access::ColorAttachmentWrite, Layout::ColorAttachment);
+    let depth_attachment = ImageUse::new(Access::DepthAttachmentWrite, Layout::DepthAttachment);
+    let transfer_src = ImageUse::new(Access::TransferRead, Layout::TransferSrc);
+    let index_count = scene.mesh.indices.len() as u32;
+    gpu.submit_and_wait(|rec| {
+        rec.image_barrier(&color, undefined, color_attachment);
+        if let Some(resolve) = &resolve {
+            rec.image_barrier(resolve, undefined, color_attachment);
+        }
+        rec.image_barrier(&depth, undefined, depth_attachment);
+        rec.begin_rendering(&RenderTargets {
+            color: &color,
+            resolve: resolve.as_ref(),
+            depth: &depth,
+            clear_color,
+        });
+        if scene.background == Background::Environment {
+            rec.bind_graphics(&pipelines.background, &background_set);
+            rec.draw(3);
+        }
+        rec.bind_graphics(&pipelines.lacquer, &lacquer_set);
+        rec.bind_mesh_buffers(&vertex_buf, &index_buf);
+        rec.draw_indexed(index_count);
+        rec.end_rendering();
+        rec.image_barrier(output, color_attachment, transfer_src);
+        rec.copy_image_to_buffer(output, &readback);
+        rec.memory_barrier(Access::TransferWrite, Access::HostRead);
+        Ok(())
+    })?;
+    let pixels: Vec<[f32; 4]> = readback.read()?;
+    Ok(HdrImage {
+        width,
+        height,
+        pixels,
+    })
 }
 
 fn validate(gpu: &GpuContext, scene: &DrawScene<'_>, settings: &RenderSettings) -> Result<()> {
@@ -233,6 +348,15 @@ fn validate(gpu: &GpuContext, scene: &DrawScene<'_>, settings: &RenderSettings) 
             scene.lights.len(),
             format!("at most {MAX_LIGHTS} lights per draw"),
         ));
+    }
+    if let Some(env) = scene.environment {
+        if env.layers.len() > MAX_ENV_LAYERS {
+            return Err(Error::invalid(
+                "layers",
+                env.layers.len(),
+                format!("at most {MAX_ENV_LAYERS} environment layers"),
+            ));
+        }
     }
     scene.camera.validate()?;
     for light in scene.lights {

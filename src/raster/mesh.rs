@@ -1,11 +1,14 @@
-//! Triangle meshes for the GPU draw and the built-in shapes of SPEC §5 (sphere, board).
+//! Triangle meshes for the GPU draw and the built-in shapes of SPEC §5 (sphere, board, and the
+//! lathed bowl and plate of `lathe.rs`).
 //!
 //! Owns the vertex/index layout the draw uploads (f32 positions and normals, u32 indices,
-//! counter-clockwise front faces seen from outside) and its validation. Does not touch the GPU;
-//! the oracle ray-casts exact analytic shapes instead of these tessellations.
+//! counter-clockwise front faces seen from outside) and its validation. Does not touch the GPU
+//! or mesh files (`mesh_io/`); the oracle ray-casts exact analytic shapes instead of these
+//! tessellations.
 
 use std::f64::consts::PI;
 
+use super::lathe::{self, BOWL_PROFILE_SEGMENTS, LATHE_SEGMENTS_AROUND, PLATE_PROFILE_SEGMENTS};
 use crate::{Error, Result};
 
 /// An indexed triangle list; `normals[i]` belongs to `positions[i]`.
@@ -171,16 +174,22 @@ pub fn board() -> Mesh {
 pub enum BuiltinMesh {
     Sphere,
     Board,
+    /// A lacquer soup bowl (wan) standing on y = 0: `lathe::bowl_profile`.
+    Bowl,
+    /// A shallow round lacquer plate standing on y = 0: `lathe::plate_profile`.
+    Plate,
 }
 
-const BUILTIN_NAMES: &str = "builtin:sphere, builtin:board";
+const BUILTIN_NAMES: &str = "builtin:sphere, builtin:board, builtin:bowl, builtin:plate";
 
 impl BuiltinMesh {
-    /// `builtin:sphere` or `builtin:board`.
+    /// `builtin:sphere`, `builtin:board`, `builtin:bowl` or `builtin:plate`.
     pub fn parse(spec: &str) -> Result<Self> {
         match spec.trim() {
             "builtin:sphere" => Ok(BuiltinMesh::Sphere),
             "builtin:board" => Ok(BuiltinMesh::Board),
+            "builtin:bowl" => Ok(BuiltinMesh::Bowl),
+            "builtin:plate" => Ok(BuiltinMesh::Plate),
             _ => Err(Error::invalid(
                 "mesh",
                 spec,
@@ -194,6 +203,8 @@ impl BuiltinMesh {
         match self {
             BuiltinMesh::Sphere => sphere(SPHERE_SEGMENTS_AROUND, SPHERE_SEGMENTS_DOWN),
             BuiltinMesh::Board => board(),
+            BuiltinMesh::Bowl => lathe::bowl(LATHE_SEGMENTS_AROUND, BOWL_PROFILE_SEGMENTS),
+            BuiltinMesh::Plate => lathe::plate(LATHE_SEGMENTS_AROUND, PLATE_PROFILE_SEGMENTS),
         }
     }
 }
@@ -327,10 +338,20 @@ mod tests {
             BuiltinMesh::parse("builtin:board").unwrap(),
             BuiltinMesh::Board
         );
-        for bad in ["sphere", "builtin:cube", ""] {
+        assert_eq!(
+            BuiltinMesh::parse("builtin:bowl").unwrap(),
+            BuiltinMesh::Bowl
+        );
+        assert_eq!(
+            BuiltinMesh::parse(" builtin:plate ").unwrap(),
+            BuiltinMesh::Plate
+        );
+        for bad in ["sphere", "builtin:cube", "bowl", ""] {
             match BuiltinMesh::parse(bad) {
                 Err(Error::InvalidParameter { reason, .. }) => {
-                    assert!(reason.contains("builtin:sphere") && reason.contains("builtin:board"))
+                    for name in ["sphere", "board", "bowl", "plate"] {
+                        assert!(reason.contains(&format!("builtin:{name}")), "{reason}");
+                    }
                 }
                 other => panic!("{bad}: {other:?}"),
             }

@@ -6,8 +6,10 @@
 
 pub mod camera;
 pub mod draw;
+pub mod lathe;
 pub mod lights;
 pub mod mesh;
+pub mod mesh_io;
 
 pub use camera::Camera;
 pub use lights::{default_lights, Light, MAX_LIGHTS};

@@ -1,0 +1,134 @@
+// Step 1 of the prefilter: equirectangular radiance → cube face texels (bilinear, × intensity,
+// environment rotated about +Y). CPU twin: environment::oracle::equirect_to_cube.
+//
+// Included by equirect_to_cube.comp (fp32) and equirect_to_cube_f64.comp (PRECISE_COORDINATES):
+// in fp32 the source position px ≈ u·W carries ~3e-5 px of rounding at W = 1024, which at a hard
+// HDR edge (neighbours 100× apart) is a 3e-3 relative error. With shaderFloat64 the direction, its
+// angles and px are computed in double (GLSL has no double atan: the fp32 angle is refined by one
+// Newton step with double sin/cos polynomials), and only the bilinear mix runs in fp32.
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+#include "cubemap.glsl"
+
+layout(push_constant) uniform Params {
+    uint src_width;
+    uint src_height;
+    uint face_size;
+    float intensity;
+    float rotation_cos;
+    float rotation_sin;
+} params;
+
+layout(std430, set = 0, binding = 0) readonly buffer Source { vec4 equirect[]; };
+layout(std430, set = 0, binding = 1) writeonly buffer Cube { vec4 cube[]; };
+
+vec3 fetch(int x, int y) {
+    int w = int(params.src_width);
+    int h = int(params.src_height);
+    x = ((x % w) + w) % w;        // longitude wraps
+    y = clamp(y, 0, h - 1);       // latitude clamps at the poles
+    return equirect[uint(y) * params.src_width + uint(x)].rgb;
+}
+
+#ifdef PRECISE_COORDINATES
+const double PI_D = 3.14159265358979323846LF;
+
+// sin and cos for |x| ≤ π: quadrant reduction, then Taylor series to x¹⁷ on |r| ≤ π/4
+// (truncation < 2e-17).
+dvec2 sincos_d(double x) {
+    double q = floor(x / (0.5LF * PI_D) + 0.5LF);
+    double r = x - q * (0.5LF * PI_D);
+    double r2 = r * r;
+    double s = 1.0LF / 355687428096000.0LF; // 1/17!
+    s = s * r2 - 1.0LF / 1307674368000.0LF;
+    s = s * r2 + 1.0LF / 6227020800.0LF;
+    s = s * r2 - 1.0LF / 39916800.0LF;
+    s = s * r2 + 1.0LF / 362880.0LF;
+    s = s * r2 - 1.0LF / 5040.0LF;
+    s = s * r2 + 1.0LF / 120.0LF;
+    s = s * r2 - 1.0LF / 6.0LF;
+    s = r + r * r2 * s;
+    double c = 1.0LF / 20922789888000.0LF; // 1/16!
+    c = c * r2 - 1.0LF / 87178291200.0LF;
+    c = c * r2 + 1.0LF / 479001600.0LF;
+    c = c * r2 - 1.0LF / 3628800.0LF;
+    c = c * r2 + 1.0LF / 40320.0LF;
+    c = c * r2 - 1.0LF / 720.0LF;
+    c = c * r2 + 1.0LF / 24.0LF;
+    c = c * r2 - 0.5LF;
+    c = 1.0LF + r2 * c;
+    int quadrant = int(q) & 3;
+    if (quadrant == 0) return dvec2(s, c);
+    if (quadrant == 1) return dvec2(c, -s);
+    if (quadrant == 2) return dvec2(-s, -c);
+    return dvec2(-c, s);
+}
+
+// atan2 in double: the fp32 angle a0 (~1e-7 rad) plus the Newton correction
+// atan(r·sin(φ − a0) / r·cos(φ − a0)) ≈ its argument (the cube of 1e-7 is negligible).
+double atan2_d(double y, double x) {
+    double a0 = double(atan2_accurate(float(y), float(x)));
+    dvec2 sc = sincos_d(a0);
+    double num = y * sc.y - x * sc.x;
+    double den = x * sc.y + y * sc.x;
+    return den > 0.0LF ? a0 + num / den : a0;
+}
+
+// Source position (px, py) in pixels for cube texel (face, i, j).
+dvec2 source_position(int face, uint i, uint j, uint n) {
+    double sc = 2.0LF * (double(i) + 0.5LF) / double(n) - 1.0LF;
+    double tc = 2.0LF * (double(j) + 0.5LF) / double(n) - 1.0LF;
+    dvec3 d;
+    switch (face) {
+    case 0: d = dvec3(1.0LF, -tc, -sc); break;
+    case 1: d = dvec3(-1.0LF, -tc, sc); break;
+    case 2: d = dvec3(sc, 1.0LF, tc); break;
+    case 3: d = dvec3(sc, -1.0LF, -tc); break;
+    case 4: d = dvec3(sc, -tc, 1.0LF); break;
+    default: d = dvec3(-sc, -tc, -1.0LF); break;
+    }
+    d = d / sqrt(dot(d, d));
+    double c = double(params.rotation_cos);
+    double s = double(params.rotation_sin);
+    dvec3 e = dvec3(d.x * c - d.z * s, d.y, d.x * s + d.z * c);
+    double u = 0.5LF + atan2_d(e.x, -e.z) / (2.0LF * PI_D);
+    double v = atan2_d(sqrt(e.x * e.x + e.z * e.z), e.y) / PI_D;
+    return dvec2(u * double(params.src_width) - 0.5LF, v * double(params.src_height) - 0.5LF);
+}
+#else
+vec2 source_position(int face, uint i, uint j, uint n) {
+    float solid_angle;
+    vec3 d = texel_direction(face, i, j, n, solid_angle);
+    vec3 e = world_to_environment(d, params.rotation_cos, params.rotation_sin);
+    vec2 uv = direction_to_equirect(e);
+    return vec2(uv.x * float(params.src_width) - 0.5, uv.y * float(params.src_height) - 0.5);
+}
+#endif
+
+void main() {
+    uvec3 id = gl_GlobalInvocationID;
+    uint n = params.face_size;
+    if (id.x >= n || id.y >= n) {
+        return;
+    }
+    int face = int(id.z);
+#ifdef PRECISE_COORDINATES
+    dvec2 p = source_position(face, id.x, id.y, n);
+    dvec2 p0 = floor(p);
+    float fx = float(p.x - p0.x);
+    float fy = float(p.y - p0.y);
+    int ix = int(p0.x);
+    int iy = int(p0.y);
+#else
+    vec2 p = source_position(face, id.x, id.y, n);
+    vec2 p0 = floor(p);
+    float fx = p.x - p0.x;
+    float fy = p.y - p0.y;
+    int ix = int(p0.x);
+    int iy = int(p0.y);
+#endif
+    vec3 top = mix(fetch(ix, iy), fetch(ix + 1, iy), fx);
+    vec3 bottom = mix(fetch(ix, iy + 1), fetch(ix + 1, iy + 1), fx);
+    cube[cube_index(face, id.x, id.y, n)] = vec4(mix(top, bottom, fy) * params.intensity, 1.0);
+}

@@ -1,0 +1,330 @@
+//! The prefilter on the GPU: the four compute steps of `mod.rs` in one submit, with barriers
+//! between the steps, ending in sampled cube images for the fragment shader. No CPU fallback:
+//! the CPU twin (`oracle.rs`) exists for tests and benchmarks only.
+
+use super::image::{CubeImage, Equirect, PrefilteredEnvironment};
+use super::params::{PrefilterParams, LOBE_CUTOFF};
+use crate::gpu::{
+    Access, Binding, BindingKind, Buffer, BufferDesc, BufferUsage, ComputePipeline, DescriptorSet,
+    GpuContext, Image, ImageDesc, ImageUsage, ImageUse, Layout, Recorder, Resource,
+};
+use crate::{Error, Result};
+
+/// Threads per workgroup side; must equal local_size_x/y in the prefilter shaders.
+const WORKGROUP: u32 = 8;
+
+const IO_BINDINGS: [Binding; 2] = [
+    Binding::new(0, BindingKind::StorageBuffer),
+    Binding::new(1, BindingKind::StorageBuffer),
+];
+
+/// The four prefilter pipelines, made once.
+pub struct GpuPrefilter {
+    equirect_to_cube: ComputePipeline,
+    downsample: ComputePipeline,
+    blur_layer: ComputePipeline,
+    irradiance: ComputePipeline,
+}
+
+/// The prefiltered environment on the device: cube images ready to sample, plus the buffers they
+/// were copied from (kept for read-back by tests and `shikki prefilter`).
+pub struct GpuEnvironment {
+    pub betas: Vec<f64>,
+    pub layers: Vec<Image>,
+    pub irradiance: Image,
+    layer_buffers: Vec<(u32, Buffer)>,
+    irradiance_buffer: (u32, Buffer),
+}
+
+fn cube_bytes(face: u32) -> u64 {
+    6 * u64::from(face) * u64::from(face) * 16
+}
+
+fn groups(face: u32) -> u32 {
+    face.div_ceil(WORKGROUP)
+}
+
+impl GpuPrefilter {
+    pub fn new(gpu: &GpuContext) -> Result<Self> {
+        use crate::gpu::shaders::*;
+        Ok(Self {
+            equirect_to_cube: if gpu.info().shader_float64 {
+                gpu.create_compute_pipeline(
+                    "equirect_to_cube_f64.comp",
+                    EQUIRECT_TO_CUBE_F64_COMP,
+                    &IO_BINDINGS,
+                    24,
+                )?
+            } else {
+                gpu.create_compute_pipeline(
+                    "equirect_to_cube.comp",
+                    EQUIRECT_TO_CUBE_COMP,
+                    &IO_BINDINGS,
+                    24,
+                )?
+            },
+            downsample: gpu.create_compute_pipeline(
+                "downsample.comp",
+                DOWNSAMPLE_COMP,
+                &IO_BINDINGS,
+                4,
+            )?,
+            blur_layer: gpu.create_compute_pipeline(
+                "prefilter_layers.comp",
+                PREFILTER_LAYERS_COMP,
+                &IO_BINDINGS,
+                12,
+            )?,
+            irradiance: gpu.create_compute_pipeline(
+                "irradiance.comp",
+                IRRADIANCE_COMP,
+                &IO_BINDINGS,
+                4,
+            )?,
+        })
+    }
+
+    /// Runs equirect → cube → mips → layers + irradiance, all on the GPU.
+    pub fn run(
+        &self,
+        gpu: &GpuContext,
+        source: &Equirect,
+        params: &PrefilterParams,
+        intensity: f64,
+        rotation_deg: f64,
+    ) -> Result<GpuEnvironment> {
+        params.validate()?;
+        check_source(source, intensity, rotation_deg)?;
+        let plan = params.plan();
+        let mip_faces = params.mip_faces();
+
+        let pixels: Vec<[f32; 4]> = source
+            .pixels
+            .iter()
+            .map(|p| [p[0], p[1], p[2], 1.0])
+            .collect();
+        let mut source_buf = gpu.create_buffer(BufferDesc::upload(
+            "environment equirect",
+            (pixels.len() * 16) as u64,
+            BufferUsage::STORAGE,
+        ))?;
+        source_buf.write(&pixels)?;
+
+        let storage = BufferUsage::STORAGE | BufferUsage::TRANSFER_SRC;
+        let mips: Vec<Buffer> = mip_faces
+            .iter()
+            .map(|&m| gpu.create_buffer(BufferDesc::device_local("mip", cube_bytes(m), storage)))
+            .collect::<std::result::Result<_, _>>()?;
+        let mip_of = |face: u32| -> Result<&Buffer> {
+            mip_faces
+                .iter()
+                .position(|&m| m == face)
+                .map(|i| &mips[i])
+                .ok_or_else(|| Error::invalid("face size", face, "internal: no mip of that size"))
+        };
+        let mut layer_buffers = Vec::new();
+        for layer in plan.iter().skip(1) {
+            let buf = gpu.create_buffer(BufferDesc::device_local(
+                "layer",
+                cube_bytes(layer.face_size),
+                storage,
+            ))?;
+            layer_buffers.push((layer.face_size, buf));
+        }
+        let irr_face = params.irradiance_face();
+        let irradiance_buf = gpu.create_buffer(BufferDesc::device_local(
+            "irradiance",
+            cube_bytes(irr_face),
+            storage,
+        ))?;
+
+        // Descriptor sets, made before recording so they outlive the submit.
+        let set =
+            |pipeline: &ComputePipeline, src: &Buffer, dst: &Buffer| -> Result<DescriptorSet> {
+                Ok(gpu.create_descriptor_set(
+                    pipeline.layout(),
+                    &[(0, Resource::Buffer(src)), (1, Resource::Buffer(dst))],
+                )?)
+            };
+        let to_cube_set = set(&self.equirect_to_cube, &source_buf, &mips[0])?;
+        let down_sets: Vec<DescriptorSet> = mips
+            .windows(2)
+            .map(|pair| set(&self.downsample, &pair[0], &pair[1]))
+            .collect::<Result<_>>()?;
+        let blur_sets: Vec<DescriptorSet> = layer_buffers
+            .iter()
+            .map(|(face, dst)| set(&self.blur_layer, mip_of(*face)?, dst))
+            .collect::<Result<_>>()?;
+        let irr_set = set(&self.irradiance, mip_of(irr_face)?, &irradiance_buf)?;
+
+        // The sampled cube images: layer 0 is the base mip itself.
+        let sampled = ImageUsage::SAMPLED | ImageUsage::TRANSFER_DST;
+        let mut layers =
+            vec![gpu.create_image(ImageDesc::cube("layer 0", params.face_size).usage(sampled))?];
+        for (face, _) in &layer_buffers {
+            layers.push(gpu.create_image(ImageDesc::cube("layer", *face).usage(sampled))?);
+        }
+        let irradiance =
+            gpu.create_image(ImageDesc::cube("irradiance", irr_face).usage(sampled))?;
+
+        let (rot_sin, rot_cos) = rotation_deg.to_radians().sin_cos();
+        gpu.submit_and_wait(|rec| {
+            // 1. equirect → cube
+            rec.bind_compute(&self.equirect_to_cube, &to_cube_set);
+            rec.push_constants(
+                &self.equirect_to_cube,
+                bytemuck::cast_slice(&[
+                    source.width,
+                    source.height,
+                    params.face_size,
+                    (intensity as f32).to_bits(),
+                    (rot_cos as f32).to_bits(),
+                    (rot_sin as f32).to_bits(),
+                ]),
+            );
+            rec.dispatch(groups(params.face_size), groups(params.face_size), 6);
+            rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
+            // 2. mip chain, each level from the previous one
+            for (level, down_set) in down_sets.iter().enumerate() {
+                let face = mip_faces[level + 1];
+                rec.bind_compute(&self.downsample, down_set);
+                rec.push_constants(&self.downsample, bytemuck::bytes_of(&face));
+                rec.dispatch(groups(face), groups(face), 6);
+                rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
+            }
+            // 3. blurred layers and 4. irradiance: independent of each other
+            for ((layer, (face, _)), blur_set) in
+                plan.iter().skip(1).zip(&layer_buffers).zip(&blur_sets)
+            {
+                rec.bind_compute(&self.blur_layer, blur_set);
+                rec.push_constants(
+                    &self.blur_layer,
+                    bytemuck::cast_slice(&[
+                        *face,
+                        (layer.beta as f32).to_bits(),
+                        (LOBE_CUTOFF as f32).to_bits(),
+                    ]),
+                );
+                rec.dispatch(groups(*face), groups(*face), 6);
+            }
+            rec.bind_compute(&self.irradiance, &irr_set);
+            rec.push_constants(&self.irradiance, bytemuck::bytes_of(&irr_face));
+            rec.dispatch(groups(irr_face), groups(irr_face), 6);
+            rec.memory_barrier(Access::ComputeShaderWrite, Access::TransferRead);
+            // 5. buffers → sampled cube images
+            copy_to_image(rec, &mips[0], &layers[0]);
+            for ((_, buf), image) in layer_buffers.iter().zip(&layers[1..]) {
+                copy_to_image(rec, buf, image);
+            }
+            copy_to_image(rec, &irradiance_buf, &irradiance);
+            Ok(())
+        })?;
+
+        // Layer 0's buffer is the base mip; keep it for read-back.
+        let mut mips = mips;
+        let base = mips.swap_remove(0);
+        let mut all_layers = vec![(params.face_size, base)];
+        all_layers.extend(layer_buffers);
+        Ok(GpuEnvironment {
+            betas: plan.iter().map(|l| l.beta).collect(),
+            layers,
+            irradiance,
+            layer_buffers: all_layers,
+            irradiance_buffer: (irr_face, irradiance_buf),
+        })
+    }
+}
+
+/// TransferDst → copy → ShaderRead for the fragment shader.
+fn copy_to_image(rec: &mut Recorder<'_>, buffer: &Buffer, image: &Image) {
+    rec.image_barrier(
+        image,
+        ImageUse::new(Access::Nothing, Layout::Undefined),
+        ImageUse::new(Access::TransferWrite, Layout::TransferDst),
+    );
+    rec.copy_buffer_to_image(buffer, image);
+    rec.image_barrier(
+        image,
+        ImageUse::new(Access::TransferWrite, Layout::TransferDst),
+        ImageUse::new(Access::GraphicsShaderRead, Layout::ShaderRead),
+    );
+}
+
+fn check_source(source: &Equirect, intensity: f64, rotation_deg: f64) -> Result<()> {
+    if source.width < 2 || source.height < 1 {
+        return Err(Error::invalid(
+            "environment size",
+            format!("{}x{}", source.width, source.height),
+            "must be at least 2x1 pixels",
+        ));
+    }
+    if source.pixels.len() != (source.width as usize) * (source.height as usize) {
+        return Err(Error::invalid(
+            "environment pixels",
+            source.pixels.len(),
+            "must equal width × height",
+        ));
+    }
+    if !(intensity.is_finite() && intensity >= 0.0) {
+        return Err(Error::invalid(
+            "env-intensity",
+            intensity,
+            "must be a finite number ≥ 0",
+        ));
+    }
+    if !rotation_deg.is_finite() {
+        return Err(Error::invalid(
+            "env-rotation",
+            rotation_deg,
+            "must be finite (degrees)",
+        ));
+    }
+    Ok(())
+}
+
+impl GpuEnvironment {
+    /// Copies every layer and the irradiance back to the host (tests, `shikki prefilter`).
+    pub fn read_back(&self, gpu: &GpuContext) -> Result<PrefilteredEnvironment> {
+        let targets: Vec<(u32, Buffer)> = self
+            .layer_buffers
+            .iter()
+            .chain(std::iter::once(&self.irradiance_buffer))
+            .map(|(face, _)| {
+                Ok((
+                    *face,
+                    gpu.create_buffer(BufferDesc::readback("env readback", cube_bytes(*face)))?,
+                ))
+            })
+            .collect::<Result<_>>()?;
+        let sources: Vec<&Buffer> = self
+            .layer_buffers
+            .iter()
+            .chain(std::iter::once(&self.irradiance_buffer))
+            .map(|(_, b)| b)
+            .collect();
+        gpu.submit_and_wait(|rec| {
+            for (src, (_, dst)) in sources.iter().zip(&targets) {
+                rec.copy_buffer(src, dst);
+            }
+            rec.memory_barrier(Access::TransferWrite, Access::HostRead);
+            Ok(())
+        })?;
+        let mut cubes = targets
+            .iter()
+            .map(|(face, buf)| {
+                Ok(CubeImage {
+                    face_size: *face,
+                    texels: buf.read()?,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let irradiance = cubes.pop().ok_or_else(|| {
+            Error::invalid("environment", "empty", "internal: no irradiance read back")
+        })?;
+        Ok(PrefilteredEnvironment {
+            betas: self.betas.clone(),
+            layers: cubes,
+            irradiance,
+        })
+    }
+}

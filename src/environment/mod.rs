@@ -1,0 +1,26 @@
+//! # environment — light from an HDR environment map (SPEC §4)
+//!
+//! ```text
+//!  load (Radiance .hdr | OpenEXR | builtin:studio) ──► equirect (linear RGB f32)
+//!     │  GPU compute (gpu.rs)            │  CPU oracle (oracle.rs), same algorithm, same params
+//!     ▼                                  ▼
+//!  1. equirect → cube (face N, bilinear, × intensity, rotated about +Y)
+//!  2. cube → mip chain (2×2, solid-angle weighted)
+//!  3. layer k: brute-force lobe convolution w = exp((c−1)/β_k²) of the mip of the layer's size
+//!  4. irradiance: cosine convolution of the 32² mip
+//! ```
+//! `definition.rs` is SPEC §4's integral evaluated at full source resolution, for tests only.
+
+pub mod cube;
+pub mod definition;
+pub mod gpu;
+pub mod image;
+pub mod load;
+pub mod oracle;
+pub mod params;
+pub mod preview;
+
+pub use image::{CubeImage, Equirect, PrefilteredEnvironment};
+pub use load::{load_environment, LoadedEnvironment};
+pub use oracle::prefilter_cpu;
+pub use params::{LayerPlan, PrefilterParams};

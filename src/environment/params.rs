@@ -1,0 +1,297 @@
+//! The prefilter's parameters and the plan derived from them (SPEC §4): which β each blurred layer
+//! has, at what face size it is stored, and which downsampled source it is convolved from. The GPU
+//! prefilter (`gpu.rs`) and the CPU oracle (`oracle.rs`) both run exactly this plan.
+
+use crate::{Error, Result};
+
+/// Layers whose weight exp(-(1-c)/β²) falls below exp(-LOBE_CUTOFF) are not summed: 12.5 is 5σ of
+/// the Gaussian the lobe approximates (1 - cos θ ≈ θ²/2), a relative weight of 3.7e-6, far below
+/// the accuracy the layers are held to (mean 2 % against the untruncated definition).
+pub const LOBE_CUTOFF: f64 = 12.5;
+
+/// The smallest face size a blurred layer is stored at: below 8 texels per face, bilinear
+/// interpolation across the whole-sphere lobes becomes visibly faceted.
+pub const MIN_LAYER_FACE: u32 = 8;
+
+/// Face size of the irradiance cube, and of the source it integrates: E(N) is a cosine-weighted
+/// integral over a hemisphere, so 32² texels per face resolve it far below 1e-3 (measured in the
+/// irradiance tests).
+pub const IRRADIANCE_FACE: u32 = 32;
+
+// irradiance.comp loops over all 6·M² source texels; lavapipe cuts loops off at 65535 iterations.
+const _: () = assert!(6 * IRRADIANCE_FACE * IRRADIANCE_FACE < 65535);
+
+/// Limits on what a user may ask for.
+pub const MAX_FACE_SIZE: u32 = 4096;
+pub const MAX_LAYERS: u32 = 16;
+
+/// What the user chooses (`shikki prefilter --face-size --layers --beta-min --beta-max`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrefilterParams {
+    /// Face size N of layer 0 (the sharp map); a power of two.
+    pub face_size: u32,
+    /// K, the number of layers including the sharp layer 0.
+    pub layers: u32,
+    pub beta_min: f64,
+    pub beta_max: f64,
+}
+
+impl PrefilterParams {
+    /// SPEC defaults (K = 8, β 0.02 … 1.0) with the face size chosen from the source width.
+    pub fn for_source_width(width: u32) -> Self {
+        Self {
+            face_size: default_face_size(width),
+            layers: 8,
+            beta_min: 0.02,
+            beta_max: 1.0,
+        }
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        let n = self.face_size;
+        if !(MIN_LAYER_FACE..=MAX_FACE_SIZE).contains(&n) || !n.is_power_of_two() {
+            return Err(Error::invalid(
+                "face size",
+                n,
+                format!(
+                    "must be a power of two in {MIN_LAYER_FACE}..={MAX_FACE_SIZE} (e.g. 256, 512)"
+                ),
+            ));
+        }
+        if !(2..=MAX_LAYERS).contains(&self.layers) {
+            return Err(Error::invalid(
+                "layers",
+                self.layers,
+                format!("K must be in 2..={MAX_LAYERS} (layer 0 is the sharp map)"),
+            ));
+        }
+        for (field, value) in [("beta_min", self.beta_min), ("beta_max", self.beta_max)] {
+            if !(value.is_finite() && value > 0.0 && value <= 4.0) {
+                return Err(Error::invalid(field, value, "must be in (0, 4]"));
+            }
+        }
+        if self.beta_max < self.beta_min {
+            return Err(Error::invalid(
+                "beta_max",
+                self.beta_max,
+                format!("must be ≥ beta_min = {}", self.beta_min),
+            ));
+        }
+        Ok(())
+    }
+
+    /// β_k of SPEC §4: β_0 = 0; β_k = β_min·(β_max/β_min)^((k-1)/(K-2)) for k ≥ 1 (K = 2: β_1 = β_min).
+    pub fn beta(&self, k: u32) -> f64 {
+        if k == 0 {
+            return 0.0;
+        }
+        if self.layers <= 2 {
+            return self.beta_min;
+        }
+        let t = f64::from(k - 1) / f64::from(self.layers - 2);
+        self.beta_min * (self.beta_max / self.beta_min).powf(t)
+    }
+
+    /// The plan for every layer, 0..K.
+    pub fn plan(&self) -> Vec<LayerPlan> {
+        (0..self.layers)
+            .map(|k| {
+                let beta = self.beta(k);
+                LayerPlan {
+                    beta,
+                    face_size: if k == 0 {
+                        self.face_size
+                    } else {
+                        layer_face_size(beta, self.face_size)
+                    },
+                }
+            })
+            .collect()
+    }
+
+    /// The face sizes of the source mip chain: N, N/2, …, down to the smallest any layer or the
+    /// irradiance needs.
+    pub fn mip_faces(&self) -> Vec<u32> {
+        let smallest = self
+            .plan()
+            .iter()
+            .map(|l| l.face_size)
+            .chain(std::iter::once(IRRADIANCE_FACE.min(self.face_size)))
+            .min()
+            .unwrap_or(self.face_size);
+        let mut faces = vec![self.face_size];
+        while let Some(&last) = faces.last() {
+            if last / 2 < smallest {
+                break;
+            }
+            faces.push(last / 2);
+        }
+        faces
+    }
+
+    /// Face size of the irradiance cube.
+    pub fn irradiance_face(&self) -> u32 {
+        IRRADIANCE_FACE.min(self.face_size)
+    }
+}
+
+/// One blurred layer: its lobe width and the face size it is stored at. A blurred layer is
+/// convolved from the source mip of the same face size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LayerPlan {
+    pub beta: f64,
+    pub face_size: u32,
+}
+
+/// Face size for lobe width β: the smallest power of two whose texel at the face centre, (π/2)/M
+/// radians, is no wider than β, clamped to [MIN_LAYER_FACE, N]. Texels as wide as the lobe's σ add
+/// only h²/12 ≈ 8 % of σ² of extra variance from the box-filtered source (≈ 4 % in width), and keep
+/// the brute-force convolution's window at ~(10β/h)² ≈ 100–300 texels per output texel.
+pub fn layer_face_size(beta: f64, face_size: u32) -> u32 {
+    let wanted = (std::f64::consts::FRAC_PI_2 / beta).ceil().max(1.0);
+    let pow2 = if wanted >= f64::from(face_size) {
+        face_size
+    } else {
+        (wanted as u32).next_power_of_two()
+    };
+    pow2.clamp(MIN_LAYER_FACE.min(face_size), face_size)
+}
+
+/// Default face size for an equirectangular source of the given width: the power of two nearest
+/// to width/4 (one cube texel per source texel at the equator), in 16..=2048.
+pub fn default_face_size(width: u32) -> u32 {
+    let target = (f64::from(width) / 4.0).max(1.0);
+    let lower = 1u32 << (target.log2().floor() as u32).min(31);
+    let upper = lower.saturating_mul(2);
+    let nearest = if target / f64::from(lower) <= f64::from(upper) / target {
+        lower
+    } else {
+        upper
+    };
+    nearest.clamp(16, 2048)
+}
+
+/// The blur β(nv) a fragment sees (SPEC §4): β_grazing + (β_normal - β_grazing)·nv^p.
+pub fn view_beta(beta_normal: f64, beta_grazing: f64, beta_power: f64, nv: f64) -> f64 {
+    beta_grazing + (beta_normal - beta_grazing) * nv.clamp(0.0, 1.0).powf(beta_power)
+}
+
+/// A material's view-dependent blur parameters (SPEC §4 `beta_normal`, `beta_grazing`,
+/// `beta_power`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewBlur {
+    pub beta_normal: f64,
+    pub beta_grazing: f64,
+    pub beta_power: f64,
+}
+
+impl Default for ViewBlur {
+    /// The `smooth` preset's values.
+    fn default() -> Self {
+        Self {
+            beta_normal: 0.1,
+            beta_grazing: 0.1,
+            beta_power: 1.0,
+        }
+    }
+}
+
+impl ViewBlur {
+    pub fn of(material: &crate::model::LacquerMaterial) -> Self {
+        Self {
+            beta_normal: material.beta_normal,
+            beta_grazing: material.beta_grazing,
+            beta_power: material.beta_power,
+        }
+    }
+
+    /// β at this nv.
+    pub fn beta(&self, nv: f64) -> f64 {
+        view_beta(self.beta_normal, self.beta_grazing, self.beta_power, nv)
+    }
+}
+
+/// Where a lookup at `beta` falls between layers (SPEC §4): (k, t) meaning
+/// mix(layer k, layer k+1, t). Linear in β between layers 0 and 1, linear in log β above; clamped
+/// to the last layer beyond β_max.
+pub fn layer_blend(betas: &[f64], beta: f64) -> (usize, f64) {
+    let last = betas.len().saturating_sub(1);
+    if last == 0 || beta <= 0.0 {
+        return (0, 0.0);
+    }
+    if beta < betas[1] {
+        return (0, beta / betas[1]);
+    }
+    for k in 1..last {
+        if beta < betas[k + 1] {
+            let t = (beta.ln() - betas[k].ln()) / (betas[k + 1].ln() - betas[k].ln());
+            return (k, t);
+        }
+    }
+    (last, 0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn betas_follow_spec_geometric_series() {
+        let p = PrefilterParams::for_source_width(1024);
+        assert_eq!(p.face_size, 256);
+        assert_eq!(p.beta(0), 0.0);
+        assert!((p.beta(1) - 0.02).abs() < 1e-15);
+        assert!((p.beta(7) - 1.0).abs() < 1e-12);
+        // β_4 = 0.02·50^(1/2) by hand.
+        assert!((p.beta(4) - 0.02 * 50f64.sqrt()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn layer_faces_resolve_their_lobe() {
+        let p = PrefilterParams {
+            face_size: 512,
+            layers: 8,
+            beta_min: 0.02,
+            beta_max: 1.0,
+        };
+        let faces: Vec<u32> = p.plan().iter().map(|l| l.face_size).collect();
+        // π/2/0.02 = 78.5 → 128; β_2 = 0.0384 → 40.9 → 64; … β_7 = 1 → 1.57 → 2 → clamped to 8.
+        assert_eq!(faces, vec![512, 128, 64, 32, 16, 8, 8, 8]);
+        assert_eq!(p.mip_faces(), vec![512, 256, 128, 64, 32, 16, 8]);
+    }
+
+    #[test]
+    fn blend_is_linear_below_layer_one_and_log_linear_above() {
+        let betas = [0.0, 0.02, 0.04, 0.08];
+        assert_eq!(layer_blend(&betas, 0.01), (0, 0.5));
+        let (k, t) = layer_blend(&betas, 0.02 * 2f64.sqrt());
+        assert_eq!(k, 1);
+        assert!((t - 0.5).abs() < 1e-12);
+        assert_eq!(layer_blend(&betas, 5.0), (3, 0.0));
+    }
+
+    #[test]
+    fn view_beta_matches_spec_presets() {
+        // rough: β_normal 0.6, β_grazing 0.05, p = 1.
+        assert!((view_beta(0.6, 0.05, 1.0, 1.0) - 0.6).abs() < 1e-15);
+        assert!((view_beta(0.6, 0.05, 1.0, 0.0) - 0.05).abs() < 1e-15);
+        assert!((view_beta(0.6, 0.05, 1.0, 0.5) - 0.325).abs() < 1e-15);
+    }
+
+    #[test]
+    fn invalid_params_are_rejected_with_the_range() {
+        let mut p = PrefilterParams::for_source_width(1024);
+        p.face_size = 300;
+        assert!(p
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("power of two"));
+        p.face_size = 256;
+        p.layers = 1;
+        assert!(p.validate().unwrap_err().to_string().contains("2..=16"));
+        p.layers = 8;
+        p.beta_min = f64::NAN;
+        assert!(p.validate().is_err());
+    }
+}

@@ -1,0 +1,415 @@
+//! The CPU side of the environment (issue 3), without a GPU: the prefilter oracle against SPEC §4's
+//! definition on a synthetic map, seams at cube edges, and the real HDRIs of `../shared/env`
+//! (plus Debian's DWAB original when blender-data is installed). The timing of the oracle at
+//! face 512, K = 8 is an ignored test:
+//! `cargo test --release --test environment_cpu -- --ignored --nocapture`.
+
+use std::path::PathBuf;
+use std::sync::OnceLock;
+
+use glam::DVec3;
+use shikki::environment::cube::{face_direction, texel_coord, texel_direction};
+use shikki::environment::definition::{irradiance_definition, prefiltered_radiance_definition};
+use shikki::environment::load::{decode_exr, load_environment};
+use shikki::environment::{
+    prefilter_cpu, CubeImage, Equirect, PrefilterParams, PrefilteredEnvironment,
+};
+
+/// Centre of the bright disc: on the edge between the +X and −Z faces, above the horizon, so that
+/// the brightest feature straddles a seam.
+fn disc_centre() -> DVec3 {
+    DVec3::new(1.0, 0.35, -1.0).normalize()
+}
+
+/// The synthetic environment of the issue: a smooth sky gradient, a hard horizon (ground ~5×
+/// darker) and a disc of radius 3° at 50× the sky.
+fn synthetic_radiance(d: DVec3) -> [f32; 3] {
+    let sky = [0.6 + 0.4 * d.y, 0.7 + 0.2 * d.x, 1.0 - 0.3 * d.z];
+    if d.dot(disc_centre()) >= 3f64.to_radians().cos() {
+        return sky.map(|c| (50.0 * c) as f32);
+    }
+    if d.y < 0.0 {
+        return [0.15, 0.12 + 0.05 * d.z, 0.1].map(|c| c as f32);
+    }
+    sky.map(|c| c as f32)
+}
+
+fn synthetic_params() -> PrefilterParams {
+    PrefilterParams {
+        face_size: 128,
+        layers: 8,
+        beta_min: 0.02,
+        beta_max: 1.0,
+    }
+}
+
+/// The 512 × 256 synthetic map and its prefilter at face 128, K = 8 (computed once).
+fn synthetic() -> &'static (Equirect, PrefilteredEnvironment) {
+    static CELL: OnceLock<(Equirect, PrefilteredEnvironment)> = OnceLock::new();
+    CELL.get_or_init(|| {
+        let src = Equirect::from_fn(512, 256, synthetic_radiance);
+        let env = prefilter_cpu(&src, &synthetic_params(), 1.0, 0.0).unwrap();
+        (src, env)
+    })
+}
+
+/// The deterministic subset of a cube's texels compared with the brute-force definition: every
+/// `stride`-th index, stride odd (so it walks across rows and faces of a power-of-two cube) and
+/// at least 7, chosen so no layer needs more than ~1500 evaluations of the definition.
+fn subset(cube: &CubeImage) -> Vec<(usize, u32, u32)> {
+    let m = cube.face_size as usize;
+    let count = 6 * m * m;
+    let stride = (count / 1500).max(7) | 1;
+    (0..count)
+        .step_by(stride)
+        .map(|index| {
+            (
+                index / (m * m),
+                (index % m) as u32,
+                ((index / m) % m) as u32,
+            )
+        })
+        .collect()
+}
+
+fn relative_error(got: [f32; 4], want: [f64; 3]) -> f64 {
+    (0..3)
+        .map(|c| (f64::from(got[c]) - want[c]).abs() / want[c].abs())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn blurred_layers_match_the_definition_on_a_disc_gradient_and_horizon() {
+    let (src, env) = synthetic();
+    for (k, layer) in env.layers.iter().enumerate().skip(1) {
+        let beta = env.betas[k];
+        let texels = subset(layer);
+        let errors: Vec<f64> = std::thread::scope(|scope| {
+            let halves: Vec<_> = texels
+                .chunks(texels.len().div_ceil(2))
+                .map(|chunk| {
+                    scope.spawn(move || {
+                        chunk
+                            .iter()
+                            .map(|&(f, i, j)| {
+                                let d = texel_direction(f, i, j, layer.face_size);
+                                relative_error(
+                                    layer.get(f, i, j),
+                                    prefiltered_radiance_definition(src, d, beta),
+                                )
+                            })
+                            .collect::<Vec<f64>>()
+                    })
+                })
+                .collect();
+            halves.into_iter().flat_map(|h| h.join().unwrap()).collect()
+        });
+        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+        let max = errors.iter().cloned().fold(0.0, f64::max);
+        println!(
+            "layer {k}: β = {beta:.4}, face {}, {} texels: mean {:.3} %, max {:.3} %",
+            layer.face_size,
+            errors.len(),
+            100.0 * mean,
+            100.0 * max
+        );
+        // The issue's bounds for every layer against the untruncated, full-resolution integral.
+        assert!(
+            mean <= 0.02 && max <= 0.10,
+            "layer {k}: mean {mean}, max {max}"
+        );
+    }
+}
+
+#[test]
+fn irradiance_matches_the_definition() {
+    let (src, env) = synthetic();
+    let texels = subset(&env.irradiance);
+    let mut worst = 0.0f64;
+    let mut sum = 0.0;
+    for &(f, i, j) in &texels {
+        let n = texel_direction(f, i, j, env.irradiance.face_size);
+        let e = relative_error(env.irradiance.get(f, i, j), irradiance_definition(src, n));
+        worst = worst.max(e);
+        sum += e;
+    }
+    println!(
+        "irradiance: {} texels, mean {:.4} %, max {:.4} %",
+        texels.len(),
+        100.0 * sum / texels.len() as f64,
+        100.0 * worst
+    );
+    // The issue's 1 %: E is a cosine integral over a hemisphere, smooth at face 32.
+    assert!(worst <= 0.01, "worst {worst}");
+}
+
+/// The texel across the cube edge from texel (face, i, j) on the face's boundary, on the side
+/// `(ds, dt)` (one of (±1, 0), (0, ±1)).
+///
+/// Pairing: the two texels on either side of a cube edge share a segment of that edge, and the
+/// midpoint of the shared segment is a point p of the cube's surface that both faces map with
+/// |major coordinate| = 1. So p = face_direction(face, sc, tc) with the boundary coordinate
+/// pushed to ±1 and the other left at the texel centre; the neighbour face is the other one whose
+/// axis·p = 1, and p's face coordinates there (sc = e_s·p, tc = e_t·p, with e_s, e_t read off
+/// `face_direction`, i.e. the Vulkan table) give its texel. This follows the table through every
+/// flip and rotation between faces instead of listing 24 edge cases by hand.
+fn across_edge(face: usize, i: u32, j: u32, m: u32, ds: i32, dt: i32) -> (usize, u32, u32) {
+    let sc = if ds != 0 {
+        f64::from(ds)
+    } else {
+        texel_coord(i, m)
+    };
+    let tc = if dt != 0 {
+        f64::from(dt)
+    } else {
+        texel_coord(j, m)
+    };
+    let p = face_direction(face, sc, tc);
+    for other in (0..6).filter(|&f| f != face) {
+        let axis = face_direction(other, 0.0, 0.0);
+        if (p.dot(axis) - 1.0).abs() < 1e-12 {
+            let e_s = face_direction(other, 1.0, 0.0) - axis;
+            let e_t = face_direction(other, 0.0, 1.0) - axis;
+            let index = |c: f64| (((c + 1.0) / 2.0 * f64::from(m)).floor() as u32).min(m - 1);
+            return (other, index(p.dot(e_s)), index(p.dot(e_t)));
+        }
+    }
+    unreachable!("every boundary point lies on a second face")
+}
+
+fn jump(a: [f32; 4], b: [f32; 4]) -> f64 {
+    (0..3)
+        .map(|c| f64::from((a[c] - b[c]).abs()))
+        .fold(0.0, f64::max)
+}
+
+/// (largest jump between neighbours inside a face, largest jump across a cube edge).
+fn jumps(cube: &CubeImage) -> (f64, f64) {
+    let m = cube.face_size;
+    let mut inside = 0.0f64;
+    let mut across = 0.0f64;
+    for face in 0..6 {
+        for j in 0..m {
+            for i in 0..m {
+                let here = cube.get(face, i, j);
+                if i + 1 < m {
+                    inside = inside.max(jump(here, cube.get(face, i + 1, j)));
+                }
+                if j + 1 < m {
+                    inside = inside.max(jump(here, cube.get(face, i, j + 1)));
+                }
+                for (ds, dt, on_boundary) in [
+                    (-1, 0, i == 0),
+                    (1, 0, i == m - 1),
+                    (0, -1, j == 0),
+                    (0, 1, j == m - 1),
+                ] {
+                    if on_boundary {
+                        let (f, ni, nj) = across_edge(face, i, j, m, ds, dt);
+                        across = across.max(jump(here, cube.get(f, ni, nj)));
+                    }
+                }
+            }
+        }
+    }
+    (inside, across)
+}
+
+#[test]
+fn edge_pairing_is_symmetric_and_adjacent() {
+    // Going across an edge and back lands on the starting texel, and the two centres are about
+    // one texel apart: 2/M on the face plane near an edge is ~1/M radians.
+    let m = 8;
+    for face in 0..6 {
+        for e in 0..m {
+            for (i, j, ds, dt) in [
+                (0, e, -1, 0),
+                (m - 1, e, 1, 0),
+                (e, 0, 0, -1),
+                (e, m - 1, 0, 1),
+            ] {
+                let (f, ni, nj) = across_edge(face, i, j, m, ds, dt);
+                let angle =
+                    texel_direction(face, i, j, m).angle_between(texel_direction(f, ni, nj, m));
+                assert!(
+                    angle < 1.5 / f64::from(m),
+                    "{face} ({i}, {j}) → {f} ({ni}, {nj}): {angle}"
+                );
+                let back_side = [
+                    (-1, 0, ni == 0),
+                    (1, 0, ni == m - 1),
+                    (0, -1, nj == 0),
+                    (0, 1, nj == m - 1),
+                ];
+                let back = back_side
+                    .iter()
+                    .filter(|s| s.2)
+                    .map(|&(bs, bt, _)| across_edge(f, ni, nj, m, bs, bt))
+                    .any(|t| t == (face, i, j));
+                assert!(
+                    back,
+                    "{face} ({i}, {j}) → {f} ({ni}, {nj}) does not lead back"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn no_layer_has_a_seam_at_cube_edges() {
+    let (_, env) = synthetic();
+    for (k, layer) in env
+        .layers
+        .iter()
+        .chain(std::iter::once(&env.irradiance))
+        .enumerate()
+    {
+        let (inside, across) = jumps(layer);
+        println!(
+            "cube {k} (face {}): largest jump inside {inside:.5}, across an edge {across:.5}",
+            layer.face_size
+        );
+        // The issue's criterion.
+        assert!(
+            across <= inside,
+            "cube {k}: across {across} > inside {inside}"
+        );
+    }
+}
+
+fn shared_env(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/env")
+        .join(name)
+}
+
+#[test]
+fn studio_exr_and_hdr_agree_to_rgbe_precision() {
+    let exr = load_environment(shared_env("studio_piz.exr").to_str().unwrap()).unwrap();
+    let hdr = load_environment(shared_env("studio.hdr").to_str().unwrap()).unwrap();
+    assert_eq!((exr.image.width, exr.image.height), (1024, 512));
+    assert_eq!((hdr.image.width, hdr.image.height), (1024, 512));
+    assert_eq!((exr.replaced_pixels, hdr.replaced_pixels), (0, 0));
+    // RGBE stores each pixel's channels as 8-bit mantissas of a shared exponent: the step is
+    // max(rgb)/128 at most. Where a channel is bright (≥ ¼ of the pixel's largest, and the pixel
+    // not black), that step is ≤ 1/32 of the channel… the bound below is the measured behaviour,
+    // half an RGBE step plus half-float rounding, per channel.
+    let mut worst_steps = 0.0f64;
+    let mut bright_sum = 0.0;
+    let mut bright_count = 0usize;
+    for (a, b) in exr.image.pixels.iter().zip(&hdr.image.pixels) {
+        let peak = f64::from(b.iter().cloned().fold(0.0, f32::max));
+        if peak <= 0.0 {
+            continue;
+        }
+        // The exponent e with peak in [128, 256)·2^(e−136): one mantissa step is 2^(e−136).
+        let step = 2f64.powi(((peak / 128.0).log2()).floor() as i32);
+        for c in 0..3 {
+            let diff = (f64::from(a[c]) - f64::from(b[c])).abs();
+            worst_steps = worst_steps.max((diff - f64::from(a[c]) * 2f64.powi(-11)) / step);
+            if f64::from(b[c]) >= 0.25 * peak && peak > 0.01 {
+                bright_sum += diff / f64::from(b[c]);
+                bright_count += 1;
+            }
+        }
+    }
+    let bright_mean = bright_sum / bright_count as f64;
+    println!(
+        "studio exr vs hdr: worst {worst_steps:.3} RGBE steps, bright mean {:.4} %",
+        100.0 * bright_mean
+    );
+    assert!(worst_steps <= 1.0, "{worst_steps} steps");
+    assert!(bright_mean <= 0.01, "{bright_mean}");
+}
+
+#[test]
+fn courtyard_loads_in_both_formats() {
+    for name in ["courtyard_piz.exr", "courtyard.hdr"] {
+        let loaded = load_environment(shared_env(name).to_str().unwrap()).unwrap();
+        assert_eq!(
+            (loaded.image.width, loaded.image.height),
+            (1024, 512),
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn blender_dwab_original_decodes_like_its_piz_copy() {
+    // Debian's blender-data (not installed in CI): the DWAB original of studio_piz.exr.
+    let original = PathBuf::from("/usr/share/blender/datafiles/studiolights/world/studio.exr");
+    let Ok(bytes) = std::fs::read(&original) else {
+        println!(
+            "skipped: {} not installed (apt-get install blender-data)",
+            original.display()
+        );
+        return;
+    };
+    let dwab = decode_exr(&bytes, "studio.exr").unwrap();
+    let piz = load_environment(shared_env("studio_piz.exr").to_str().unwrap())
+        .unwrap()
+        .image;
+    assert_eq!((dwab.width, dwab.height), (piz.width, piz.height));
+    let mut worst = 0.0f64;
+    for (a, b) in dwab.pixels.iter().zip(&piz.pixels) {
+        for c in 0..3 {
+            worst = worst.max((a[c] - b[c]).abs() as f64 / (f64::from(b[c].abs()) + 1e-3));
+        }
+    }
+    println!("DWAB vs PIZ: worst relative difference {worst:e}");
+    // The PIZ copy holds the pixels OpenEXR's own DWAB decoder produced, in half: the `exr`
+    // crate's DWAB decoder must give the same halves.
+    assert!(worst <= 1e-3, "{worst}");
+}
+
+#[test]
+#[ignore = "timing, not a test: run with --release --ignored --nocapture"]
+fn oracle_time_face_512_eight_layers() {
+    use shikki::environment::oracle::{blur_layer, equirect_to_cube, irradiance, mip_chain};
+    use std::time::Instant;
+    let src = load_environment("builtin:studio").unwrap().image;
+    let params = PrefilterParams {
+        face_size: 512,
+        layers: 8,
+        beta_min: 0.02,
+        beta_max: 1.0,
+    };
+    let start = Instant::now();
+    let base = equirect_to_cube(&src, 512, 1.0, 0.0);
+    println!(
+        "equirect → cube 512: {:.3} s",
+        start.elapsed().as_secs_f64()
+    );
+    let t = Instant::now();
+    let mips = mip_chain(&base, &params);
+    println!("mip chain: {:.3} s", t.elapsed().as_secs_f64());
+    for (k, layer) in params.plan().iter().enumerate().skip(1) {
+        let t = Instant::now();
+        let mip = mips
+            .iter()
+            .find(|m| m.face_size == layer.face_size)
+            .unwrap();
+        blur_layer(mip, layer.beta);
+        println!(
+            "layer {k} (β {:.4}, face {}): {:.3} s",
+            layer.beta,
+            layer.face_size,
+            t.elapsed().as_secs_f64()
+        );
+    }
+    let t = Instant::now();
+    irradiance(mips.iter().find(|m| m.face_size == 32).unwrap());
+    println!("irradiance: {:.3} s", t.elapsed().as_secs_f64());
+    println!(
+        "total (steps): {:.3} s on {} threads",
+        start.elapsed().as_secs_f64(),
+        rayon_threads()
+    );
+    let t = Instant::now();
+    prefilter_cpu(&src, &params, 1.0, 0.0).unwrap();
+    println!("prefilter_cpu: {:.3} s", t.elapsed().as_secs_f64());
+}
+
+fn rayon_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
