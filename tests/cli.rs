@@ -50,14 +50,14 @@ fn no_arguments_renders_the_default_scene_to_shikki_png() {
     let bytes = std::fs::read(dir.path().join("shikki.png")).unwrap();
     let (w, h, pixels) = shikki::output::png::decode_png_rgba8(&bytes).unwrap();
     assert_eq!((w, h), (1024, 1024));
-    // Something was drawn: a lit, red object in the middle, transparent corners.
+    // Something was drawn: a lit, red object in the middle, over the environment (opaque).
     let centre = pixels[(512 * w + 512) as usize];
     assert_eq!(centre[3], 255);
     assert!(
         centre[0] > centre[1] && centre[0] > centre[2],
         "centre {centre:?} is not red"
     );
-    assert_eq!(pixels[0][3], 0);
+    assert_eq!(pixels[0][3], 255);
 }
 
 #[test]
@@ -101,6 +101,10 @@ fn exr_output_is_linear_radiance_with_coverage_alpha() {
         "rough-black",
         "--light",
         "dir:0,0,1:2,2,2",
+        "--env",
+        "none",
+        "--background",
+        "transparent",
     ];
     assert_ok(&shikki(dir.path(), &args));
     let image =
@@ -348,4 +352,136 @@ fn missing_vulkan_driver_gives_install_hint() {
     let err = stderr(&out);
     assert!(err.contains("mesa-vulkan-drivers"), "{err}");
     assert!(!dir.path().join("x.png").exists());
+}
+
+#[test]
+fn prefilter_writes_every_layer_irradiance_and_a_preview() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = shikki(
+        dir.path(),
+        &[
+            "prefilter",
+            "builtin:studio",
+            "-o",
+            "pf",
+            "--face-size",
+            "32",
+            "--layers",
+            "4",
+        ],
+    );
+    assert_ok(&out);
+    for k in 0..4 {
+        let bytes = std::fs::read(dir.path().join(format!("pf/layer_{k}.exr"))).unwrap();
+        let image = shikki::output::exr::decode_exr(&bytes).unwrap();
+        // A horizontal strip of the six faces: width 6N, height N (layer 0 at N = 32).
+        assert_eq!(image.width, 6 * image.height, "layer {k}");
+        if k == 0 {
+            assert_eq!(image.height, 32);
+        }
+        assert!(image.pixels.iter().flatten().all(|v| v.is_finite()));
+    }
+    let irradiance = shikki::output::exr::decode_exr(
+        &std::fs::read(dir.path().join("pf/irradiance.exr")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(irradiance.width, 6 * irradiance.height);
+    let preview = std::fs::read(dir.path().join("pf/preview.png")).unwrap();
+    assert!(shikki::output::png::decode_png_rgba8(&preview).is_ok());
+}
+
+#[test]
+fn prefilter_rejects_bad_parameters() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = shikki(
+        dir.path(),
+        &[
+            "prefilter",
+            "builtin:studio",
+            "-o",
+            "pf",
+            "--face-size",
+            "100",
+        ],
+    );
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("power of two"), "{}", stderr(&out));
+    let out = shikki(dir.path(), &["prefilter", "nothing.hdr", "-o", "pf"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("nothing.hdr"), "{}", stderr(&out));
+}
+
+fn shared_env(name: &str) -> String {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/env")
+        .join(name);
+    assert!(
+        path.exists(),
+        "{} is missing (shared/ must sit beside the repository)",
+        path.display()
+    );
+    path.display().to_string()
+}
+
+#[test]
+fn real_hdris_load_and_render() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["studio_piz.exr", "studio.hdr"] {
+        let env = shared_env(name);
+        let args = [
+            "render",
+            "-o",
+            "x.exr",
+            "--size",
+            "48x48",
+            "--samples",
+            "1",
+            "--env",
+            &env,
+        ];
+        assert_ok(&shikki(dir.path(), &args));
+        let image =
+            shikki::output::exr::decode_exr(&std::fs::read(dir.path().join("x.exr")).unwrap())
+                .unwrap();
+        // Background is the environment: opaque everywhere, finite, not black.
+        assert!(image
+            .pixels
+            .iter()
+            .all(|p| p[3] == 1.0 && p.iter().all(|v| v.is_finite())));
+        let mean: f32 = image.pixels.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>()
+            / image.pixels.len() as f32;
+        assert!(mean > 1e-3, "{name}: mean radiance {mean}");
+    }
+}
+
+#[test]
+fn background_modes() {
+    let dir = tempfile::tempdir().unwrap();
+    let corner = |background: &str| -> [f32; 4] {
+        let args = [
+            "render",
+            "-o",
+            "b.exr",
+            "--size",
+            "32x32",
+            "--samples",
+            "1",
+            "--background",
+            background,
+        ];
+        assert_ok(&shikki(dir.path(), &args));
+        shikki::output::exr::decode_exr(&std::fs::read(dir.path().join("b.exr")).unwrap())
+            .unwrap()
+            .get(0, 0)
+    };
+    assert_eq!(corner("transparent"), [0.0; 4]);
+    assert_eq!(corner("0.25,0.5,1"), [0.25, 0.5, 1.0, 1.0]);
+    let env = corner("env");
+    assert_eq!(env[3], 1.0);
+    let out = shikki(
+        dir.path(),
+        &["render", "-o", "b.png", "--background", "purple"],
+    );
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("purple"));
 }

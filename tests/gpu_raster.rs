@@ -5,12 +5,13 @@ mod common;
 
 use common::{assert_no_validation_messages, quantile, validated_gpu, write_failure_images};
 use glam::DVec3;
+use shikki::environment::params::ViewBlur;
 use shikki::gpu::GpuContext;
 use shikki::model::LacquerMaterial;
 use shikki::oracle::{self, intersect, AnalyticShape, OracleScene};
 use shikki::output::HdrImage;
 use shikki::raster::camera::Camera;
-use shikki::raster::draw::{DrawScene, LacquerRenderer, RenderSettings};
+use shikki::raster::draw::{Background, DrawScene, LacquerRenderer, RenderSettings};
 use shikki::raster::lights::Light;
 use shikki::raster::mesh::{self, Mesh};
 
@@ -118,6 +119,9 @@ fn render_both(
                 lights: &lights,
                 brdf: &brdf,
                 fresnel: &fresnel,
+                environment: None,
+                view_blur: ViewBlur::default(),
+                background: Background::Transparent,
             },
             &RenderSettings {
                 width: size,

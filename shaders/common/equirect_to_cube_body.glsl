@@ -11,6 +11,10 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 #include "cubemap.glsl"
 
+#ifndef SUPERSAMPLE
+#define SUPERSAMPLE 4u
+#endif
+
 layout(push_constant) uniform Params {
     uint src_width;
     uint src_height;
@@ -76,9 +80,9 @@ double atan2_d(double y, double x) {
 }
 
 // Source position (px, py) in pixels for cube texel (face, i, j).
-dvec2 source_position(int face, uint i, uint j, uint n) {
-    double sc = 2.0LF * (double(i) + 0.5LF) / double(n) - 1.0LF;
-    double tc = 2.0LF * (double(j) + 0.5LF) / double(n) - 1.0LF;
+dvec2 source_position(int face, uint i, uint j, uint n, uint a, uint b) {
+    double sc = 2.0LF * (double(i) + (double(a) + 0.5LF) / double(SUPERSAMPLE)) / double(n) - 1.0LF;
+    double tc = 2.0LF * (double(j) + (double(b) + 0.5LF) / double(SUPERSAMPLE)) / double(n) - 1.0LF;
     dvec3 d;
     switch (face) {
     case 0: d = dvec3(1.0LF, -tc, -sc); break;
@@ -94,15 +98,16 @@ dvec2 source_position(int face, uint i, uint j, uint n) {
     dvec3 e = dvec3(d.x * c - d.z * s, d.y, d.x * s + d.z * c);
     double u = 0.5LF + atan2_d(e.x, -e.z) / (2.0LF * PI_D);
     double v = atan2_d(sqrt(e.x * e.x + e.z * e.z), e.y) / PI_D;
-    return dvec2(u * double(params.src_width) - 0.5LF, v * double(params.src_height) - 0.5LF);
+    return dvec2(u * double(params.src_width), v * double(params.src_height));
 }
 #else
-vec2 source_position(int face, uint i, uint j, uint n) {
-    float solid_angle;
-    vec3 d = texel_direction(face, i, j, n, solid_angle);
+vec2 source_position(int face, uint i, uint j, uint n, uint a, uint b) {
+    float sc = 2.0 * (float(i) + (float(a) + 0.5) / float(SUPERSAMPLE)) / float(n) - 1.0;
+    float tc = 2.0 * (float(j) + (float(b) + 0.5) / float(SUPERSAMPLE)) / float(n) - 1.0;
+    vec3 d = normalize(face_direction(face, sc, tc));
     vec3 e = world_to_environment(d, params.rotation_cos, params.rotation_sin);
     vec2 uv = direction_to_equirect(e);
-    return vec2(uv.x * float(params.src_width) - 0.5, uv.y * float(params.src_height) - 0.5);
+    return vec2(uv.x * float(params.src_width), uv.y * float(params.src_height));
 }
 #endif
 
@@ -113,22 +118,17 @@ void main() {
         return;
     }
     int face = int(id.z);
+    vec3 sum = vec3(0.0);
+    for (uint b = 0u; b < SUPERSAMPLE; ++b) {
+        for (uint a = 0u; a < SUPERSAMPLE; ++a) {
 #ifdef PRECISE_COORDINATES
-    dvec2 p = source_position(face, id.x, id.y, n);
-    dvec2 p0 = floor(p);
-    float fx = float(p.x - p0.x);
-    float fy = float(p.y - p0.y);
-    int ix = int(p0.x);
-    int iy = int(p0.y);
+            dvec2 p = floor(source_position(face, id.x, id.y, n, a, b));
 #else
-    vec2 p = source_position(face, id.x, id.y, n);
-    vec2 p0 = floor(p);
-    float fx = p.x - p0.x;
-    float fy = p.y - p0.y;
-    int ix = int(p0.x);
-    int iy = int(p0.y);
+            vec2 p = floor(source_position(face, id.x, id.y, n, a, b));
 #endif
-    vec3 top = mix(fetch(ix, iy), fetch(ix + 1, iy), fx);
-    vec3 bottom = mix(fetch(ix, iy + 1), fetch(ix + 1, iy + 1), fx);
-    cube[cube_index(face, id.x, id.y, n)] = vec4(mix(top, bottom, fy) * params.intensity, 1.0);
+            sum += fetch(int(p.x), int(p.y));
+        }
+    }
+    cube[cube_index(face, id.x, id.y, n)] =
+        vec4(sum * (params.intensity / float(SUPERSAMPLE * SUPERSAMPLE)), 1.0);
 }

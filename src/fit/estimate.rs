@@ -58,8 +58,11 @@ pub struct FitResult {
     pub material: LacquerMaterial,
     /// The Fresnel table, clamped to [0, 1].
     pub fresnel: FresnelTable,
-    /// Per knot and channel: the data's weight on the knot; 0 where the table was interpolated.
+    /// Per knot and channel: the data's weight on the knot; 0 where no row reaches it.
     pub fresnel_information: Vec<[f64; 3]>,
+    /// Per knot and channel: F's standard error per unit relative noise
+    /// ([`super::separation::LinearSolution::fresnel_unit_error`]).
+    pub fresnel_unit_error: Vec<[f64; 3]>,
     /// Fresnel values the clamp to [0, 1] changed.
     pub fresnel_clamped: usize,
     /// J(m) on the first pass's grid over the whole search range (for the report's plot).
@@ -73,6 +76,20 @@ pub struct FitResult {
     pub relative_rms: f64,
     /// Things a user should know (kept law, clamps, extrapolate_g).
     pub notes: Vec<String>,
+}
+
+/// A Fresnel knot counts as measured when rows reach it and they alone fix it to ±1 per unit
+/// relative noise (±0.01 at 1 % noise); elsewhere the table is interpolated.
+pub const MEASURED_UNIT_ERROR: f64 = 1.0;
+
+impl FitResult {
+    /// Whether the data determine the Fresnel table at whole degree `knot` (every channel).
+    pub fn fresnel_measured(&self, knot: usize) -> bool {
+        (0..3).all(|c| {
+            self.fresnel_information[knot][c] > 0.0
+                && self.fresnel_unit_error[knot][c] <= MEASURED_UNIT_ERROR
+        })
+    }
 }
 
 /// Fits the lacquer model to `data`.
@@ -158,7 +175,7 @@ pub fn fit_measurements(data: &Measurements, options: &FitOptions) -> Result<Fit
         );
     }
     let r_min = ratios.iter().copied().fold(f64::INFINITY, f64::min);
-    let material = assemble_material(options, &solution.beckmann_m, &diffuse, r_min, &mut notes)?;
+    let material = assemble_material(options, solution.beckmann_m, &diffuse, r_min, &mut notes)?;
 
     let fitted = fitted_rows(
         &selected, &rows, &geometry, &solution, &material, &fresnel, &ratios,
@@ -168,6 +185,7 @@ pub fn fit_measurements(data: &Measurements, options: &FitOptions) -> Result<Fit
         material,
         fresnel,
         fresnel_information: solution.fresnel_information.clone(),
+        fresnel_unit_error: solution.fresnel_unit_error.clone(),
         fresnel_clamped: clamped,
         beckmann_grid: first.grid,
         diffuse,
@@ -185,7 +203,8 @@ fn normalisation(reference: Option<&LacquerMaterial>) -> Result<Normalisation> {
     match reference {
         Some(reference) => {
             let f_at_normal = reference.diffuse_a + reference.diffuse_b;
-            if !(f_at_normal > 0.0) {
+            // A validated material has finite a and b, so this also excludes NaN.
+            if f_at_normal <= 0.0 {
                 return Err(Error::invalid(
                     "reference a + b",
                     f_at_normal,
@@ -318,7 +337,7 @@ fn search(
 /// reference, else from the preset whose m is nearest (smooth 0.05, rough 0.2, in log m).
 fn assemble_material(
     options: &FitOptions,
-    beckmann_m: &f64,
+    beckmann_m: f64,
     diffuse: &DiffuseFit,
     r_min: f64,
     notes: &mut Vec<String>,
@@ -335,7 +354,7 @@ fn assemble_material(
             LacquerMaterial::preset(name)?
         }
     };
-    material.beckmann_m = *beckmann_m;
+    material.beckmann_m = beckmann_m;
     material.diffuse_a = diffuse.diffuse_a;
     material.diffuse_b = diffuse.diffuse_b;
     material.lacquer_law = diffuse.lacquer_law;

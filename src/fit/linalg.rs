@@ -30,10 +30,15 @@ impl SymmetricMatrix {
         }
     }
 
-    /// Solves A·x = b by Cholesky after symmetric Jacobi scaling (D^-1/2 A D^-1/2), which makes
-    /// unknowns of very different size (a diffuse offset and a Fresnel knot) equally accurate.
-    /// None if A is not positive definite to working precision (a term the data do not fix).
+    /// Solves A·x = b; see [`SymmetricMatrix::cholesky`].
     pub fn solve(&self, b: &[f64]) -> Option<Vec<f64>> {
+        Some(self.cholesky()?.solve(b))
+    }
+
+    /// The Cholesky factor after symmetric Jacobi scaling (D^-1/2 A D^-1/2), which makes unknowns
+    /// of very different size (a diffuse offset and a Fresnel knot) equally accurate. None if A
+    /// is not positive definite to working precision (a term the data do not fix).
+    pub fn cholesky(&self) -> Option<Cholesky> {
         let n = self.n;
         let scale: Vec<f64> = (0..n)
             .map(|i| {
@@ -41,7 +46,6 @@ impl SymmetricMatrix {
                 (d > 0.0 && d.is_finite()).then(|| 1.0 / d.sqrt())
             })
             .collect::<Option<_>>()?;
-        // Lower-triangular factor L of the scaled matrix, in place.
         let mut l = vec![0.0; n * n];
         for i in 0..n {
             for j in 0..=i {
@@ -61,7 +65,22 @@ impl SymmetricMatrix {
                 }
             }
         }
-        let mut y: Vec<f64> = (0..n).map(|i| b[i] * scale[i]).collect();
+        Some(Cholesky { n, l, scale })
+    }
+}
+
+/// A = D^1/2 · L·Lᵀ · D^1/2, from [`SymmetricMatrix::cholesky`].
+pub struct Cholesky {
+    n: usize,
+    l: Vec<f64>,
+    scale: Vec<f64>,
+}
+
+impl Cholesky {
+    /// x with A·x = b.
+    pub fn solve(&self, b: &[f64]) -> Vec<f64> {
+        let (n, l) = (self.n, &self.l);
+        let mut y: Vec<f64> = (0..n).map(|i| b[i] * self.scale[i]).collect();
         for i in 0..n {
             for k in 0..i {
                 y[i] -= l[i * n + k] * y[k];
@@ -74,7 +93,19 @@ impl SymmetricMatrix {
             }
             y[i] /= l[i * n + i];
         }
-        Some(y.iter().zip(&scale).map(|(v, s)| v * s).collect())
+        y.iter().zip(&self.scale).map(|(v, s)| v * s).collect()
+    }
+
+    /// (A⁻¹)_ii for each i in `indices`: the variances of those unknowns in a least-squares fit
+    /// whose normal matrix is A (unit noise).
+    pub fn inverse_diagonal(&self, indices: impl Iterator<Item = usize>) -> Vec<f64> {
+        indices
+            .map(|i| {
+                let mut unit = vec![0.0; self.n];
+                unit[i] = 1.0;
+                self.solve(&unit)[i]
+            })
+            .collect()
     }
 }
 
@@ -155,6 +186,17 @@ mod tests {
         for (got, want) in x.iter().zip([1.0, -2.0, 0.5]) {
             assert!((got - want).abs() < 1e-14, "{x:?}");
         }
+    }
+
+    #[test]
+    fn inverse_diagonal_of_a_known_inverse() {
+        // [[2, 1], [1, 2]]⁻¹ = [[2, −1], [−1, 2]]/3: diagonal 2/3 (hand value; rounding 1e-15).
+        let mut a = SymmetricMatrix::zeros(2);
+        a.add(0, 0, 2.0);
+        a.add(0, 1, 1.0);
+        a.add(1, 1, 2.0);
+        let d = a.cholesky().unwrap().inverse_diagonal(0..2);
+        assert!(d.iter().all(|v| (v - 2.0 / 3.0).abs() < 1e-15), "{d:?}");
     }
 
     #[test]

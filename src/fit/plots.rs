@@ -11,7 +11,9 @@ use plotters::prelude::*;
 use super::data::{in_plane_theta_o, luminance, Measurements};
 use super::diffuse::eval_law;
 use super::estimate::{FitResult, FittedRow};
-use super::polar::{font, polar_panel, render_png, Area, PlotResult, PolarSeries, RadialScale};
+use super::polar::{
+    font, legend, polar_panel, render_png, Area, PlotResult, PolarSeries, RadialScale,
+};
 use super::polar::{CHANNEL_COLOURS, PALETTE};
 use crate::model::brdf::{beckmann_d, lacquer_brdf, view_dependent_diffuse, BrdfParams};
 use crate::model::{FresnelTable, LacquerMaterial};
@@ -26,7 +28,7 @@ pub fn render_all(data: &Measurements, fit: &FitResult) -> Result<Vec<(String, V
         ("fig2_polar_diffuse.png", (800, 560), Figure::Diffuse),
         ("fig3_polar_specular.png", (1200, 760), Figure::Specular),
         ("fig4_beckmann.png", (1200, 500), Figure::Beckmann),
-        ("fig5_fresnel.png", (800, 560), Figure::Fresnel),
+        ("fig5_fresnel.png", (1200, 500), Figure::Fresnel),
         ("fig6_f_nv.png", (800, 560), Figure::ViewLaw),
         ("fig8_g_r.png", (800, 560), Figure::LacquerLaw),
     ] {
@@ -136,11 +138,14 @@ impl<'a> Context<'a> {
                 r.measured
             })
         };
+        // Where the model has almost no specular part, the separated specular part is only the
+        // diffuse part's noise: not shown.
+        let shown = |r: &FittedRow| !specular_only || specular_share(r) > 0.01;
         let measured: Vec<Vec<(f64, f64)>> = chosen
             .iter()
             .map(|&ti| {
                 rows.iter()
-                    .filter(|r| r.0 == ti)
+                    .filter(|r| r.0 == ti && shown(r.2))
                     .map(|r| (r.1, value(r.2)))
                     .filter(|p| p.1 > 0.0)
                     .collect()
@@ -213,7 +218,7 @@ impl<'a> Context<'a> {
     fn polar_diffuse(&self, area: &Area) -> PlotResult {
         let mut series = Vec::new();
         let mut max: f64 = 0.0;
-        for (board, sample) in self.data.samples.iter().enumerate() {
+        for board in 0..self.data.samples.len() {
             let colour = PALETTE[board % PALETTE.len()];
             let points: Vec<(f64, f64)> = self
                 .in_plane(board)
@@ -235,28 +240,30 @@ impl<'a> Context<'a> {
             });
             series.push(PolarSeries {
                 points: curve,
-                colour,
+                colour: RGBColor(0, 0, 0),
                 markers: false,
             });
-            let _ = sample;
         }
-        let legend: Vec<String> = self
+        let entries: Vec<(String, RGBColor)> = self
             .data
             .samples
             .iter()
-            .map(|s| format!("{} (r = {})", s.name, s.lacquer_ratio))
+            .enumerate()
+            .map(|(b, s)| {
+                let label = format!("{} (r = {})", s.name, s.lacquer_ratio);
+                (label, PALETTE[b % PALETTE.len()])
+            })
             .collect();
-        let title = format!(
-            "Separated diffuse part (paper Fig. 2), luminance; colours: {}",
-            legend.join(", ")
-        );
+        let title =
+            "Separated diffuse part (paper Fig. 2), luminance: points measured, black lines fitted";
         polar_panel(
             area,
-            &title,
+            title,
             RadialScale::Linear { max: max * 1.05 },
             None,
             &series,
-        )
+        )?;
+        legend(area, &entries)
     }
 
     /// Fig. 4: D measured (specular / (F·G/(4·nv·nl))) against the half-vector's tilt, with the
@@ -276,18 +283,17 @@ impl<'a> Context<'a> {
             })
             .collect();
         let max_tilt = points.iter().map(|p| p.0).fold(1.0, f64::max);
+        let top = points
+            .iter()
+            .map(|p| p.1)
+            .fold(beckmann_d(1.0, m), f64::max);
         let curve: Vec<(f64, f64)> = (0..=400)
             .map(|i| {
                 let a = max_tilt * f64::from(i) / 400.0;
                 (a, beckmann_d(a.to_radians().cos(), m))
             })
-            .filter(|p| p.1 > 0.0)
+            .filter(|p| p.1 >= top * 1e-4)
             .collect();
-        let top = points
-            .iter()
-            .chain(&curve)
-            .map(|p| p.1)
-            .fold(1e-3, f64::max);
         let mut chart = ChartBuilder::on(&left)
             .caption(format!("Beckmann D, m = {m:.4} (paper Fig. 4)"), font(18))
             .margin(10)
@@ -307,7 +313,7 @@ impl<'a> Context<'a> {
                     .iter()
                     .map(|&p| Circle::new(p, 2, PALETTE[0].filled())),
             )?
-            .label("measured (separated specular / F·G/(4·N·V·N·L))")
+            .label("measured: separated specular / (π·F·G/(4·N·V·N·L))")
             .legend(|(x, y)| Circle::new((x + 10, y), 3, PALETTE[0].filled()));
         chart
             .draw_series(LineSeries::new(curve, PALETTE[1].stroke_width(2)))?
@@ -315,6 +321,7 @@ impl<'a> Context<'a> {
             .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], PALETTE[1].stroke_width(2)));
         chart
             .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
             .label_font(font(12))
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
@@ -360,20 +367,46 @@ impl<'a> Context<'a> {
     }
 
     /// Fig. 5: the fitted table per channel (solid where the data reach, dashed where it was
-    /// interpolated) and the default dielectric table for comparison.
+    /// interpolated) and the default dielectric table for comparison; the right panel enlarges
+    /// 0–60°, where the channels differ (the paper's rise of blue) by only a few thousandths.
     fn fresnel(&self, area: &Area) -> PlotResult {
+        let (left, right) = area.split_horizontally(area.dim_in_pixel().0 / 2);
+        self.fresnel_panel(
+            &left,
+            90.0,
+            "Fresnel table F(θ), θ = acos(V·H) (paper Fig. 5)",
+        )?;
+        self.fresnel_panel(&right, 60.0, "detail, 0–60°")
+    }
+
+    fn fresnel_panel(&self, area: &Area, max_deg: f64, title: &str) -> PlotResult {
         let table = &self.fit.fresnel;
         let default = FresnelTable::dielectric(
             LacquerMaterial::default().ior_a,
             LacquerMaterial::default().ior_b,
         )?;
-        let top = table.rgb().iter().flatten().fold(0.1f64, |a, &b| a.max(b));
+        let in_range = |a: f64| a <= max_deg;
+        let values = table
+            .angles_deg()
+            .iter()
+            .zip(table.rgb())
+            .filter(|(&a, _)| in_range(a))
+            .flat_map(|(_, v)| *v);
+        let (lo, hi) = values.fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+        let pad = 0.1 * (hi - lo).max(1e-3);
+        let bottom = if max_deg >= 90.0 {
+            0.0
+        } else {
+            (lo - pad).max(0.0)
+        };
         let mut chart = ChartBuilder::on(area)
-            .caption("Fresnel table F(θ), θ = acos(V·H) (paper Fig. 5)", font(18))
+            .caption(title, font(18))
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(60)
-            .build_cartesian_2d(0.0..90.0, 0.0..top * 1.05)?;
+            .build_cartesian_2d(0.0..max_deg, bottom..hi + pad)?;
         chart
             .configure_mesh()
             .x_desc("θ [°]")
@@ -381,13 +414,31 @@ impl<'a> Context<'a> {
             .label_style(font(12))
             .axis_desc_style(font(14))
             .draw()?;
-        let measured = |k: usize| self.fit.fresnel_information[k].iter().all(|&i| i > 0.0);
+        let measured = |k: usize| self.fit.fresnel_measured(k);
+        let grey = RGBColor(120, 120, 120);
+        let dielectric: Vec<(f64, f64)> = default
+            .angles_deg()
+            .iter()
+            .zip(default.rgb())
+            .filter(|(&a, _)| in_range(a))
+            .map(|(&a, v)| (a, luminance(*v)))
+            .collect();
+        chart
+            .draw_series(DashedLineSeries::new(
+                dielectric,
+                3,
+                4,
+                grey.stroke_width(1),
+            ))?
+            .label("default dielectric (n = 1.5 + 0.0045/λ²), luminance")
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], grey));
         for (c, name) in ["R", "G", "B"].iter().enumerate() {
             let colour = CHANNEL_COLOURS[c];
             let all: Vec<(f64, f64)> = table
                 .angles_deg()
                 .iter()
                 .zip(table.rgb())
+                .filter(|(&a, _)| in_range(a))
                 .map(|(&a, v)| (a, v[c]))
                 .collect();
             chart.draw_series(DashedLineSeries::new(
@@ -409,23 +460,6 @@ impl<'a> Context<'a> {
                     PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(2))
                 });
         }
-        let dielectric: Vec<(f64, f64)> = default
-            .angles_deg()
-            .iter()
-            .zip(default.rgb())
-            .map(|(&a, v)| (a, luminance(*v)))
-            .filter(|p| p.1 <= top * 1.05)
-            .collect();
-        let grey = RGBColor(120, 120, 120);
-        chart
-            .draw_series(DashedLineSeries::new(
-                dielectric,
-                2,
-                4,
-                grey.stroke_width(1),
-            ))?
-            .label("default dielectric (n = 1.5 + 0.0045/λ²), luminance")
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], grey));
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::UpperLeft)
@@ -443,7 +477,11 @@ impl<'a> Context<'a> {
         let f1 = self.fit.normalisation.f_at_normal;
         let mut chart = ChartBuilder::on(area)
             .caption(
-                format!("f(N·V) = {a:.4} + {b:.4}·N·V (paper Fig. 6)"),
+                format!(
+                    "f(N·V) = {a:.4} {} {:.4}·N·V (paper Fig. 6)",
+                    sign(b),
+                    b.abs()
+                ),
                 font(18),
             )
             .margin(10)
@@ -523,7 +561,13 @@ impl<'a> Context<'a> {
         let [c0, c1, c2] = law;
         let mut chart = ChartBuilder::on(area)
             .caption(
-                format!("g(r) = {c0:.4} {c1:+.4}·r {c2:+.5}·r² (paper Fig. 8)"),
+                format!(
+                    "g(r) = {c0:.4} {} {:.4}·r {} {:.5}·r² (paper Fig. 8)",
+                    sign(c1),
+                    c1.abs(),
+                    sign(c2),
+                    c2.abs()
+                ),
                 font(18),
             )
             .margin(10)
@@ -565,11 +609,21 @@ impl<'a> Context<'a> {
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], grey));
         chart
             .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
             .label_font(font(12))
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .draw()?;
         Ok(())
+    }
+}
+
+/// "+" or "−" for a coefficient printed by its magnitude.
+fn sign(v: f64) -> char {
+    if v < 0.0 {
+        '−'
+    } else {
+        '+'
     }
 }
 

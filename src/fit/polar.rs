@@ -218,6 +218,16 @@ pub fn polar_panel(
     Ok(())
 }
 
+/// Coloured legend lines in the area's top-left corner.
+pub fn legend(area: &Area, entries: &[(String, RGBColor)]) -> PlotResult {
+    for (i, (label, colour)) in entries.iter().enumerate() {
+        let y = 30 + 18 * i as i32;
+        area.draw(&Circle::new((14, y + 7), 5, colour.filled()))?;
+        area.draw(&Text::new(label.clone(), (24, y), font(13)))?;
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

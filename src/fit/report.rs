@@ -83,15 +83,16 @@ pub fn residuals(data: &Measurements, fit: &FitResult) -> Vec<Residual> {
     table
 }
 
-/// Per knot and channel: σ̂/√I, the standard error of F if the knots were independent (they are
-/// not quite: neighbours share rows), with σ̂ the fit's relative RMS; infinite where no row reaches.
+/// Per knot and channel: F's standard error, σ̂ × the unit error, σ̂ the fit's relative RMS;
+/// infinite where no row reaches the knot.
 pub fn fresnel_std_errors(fit: &FitResult) -> Vec<[f64; 3]> {
-    fit.fresnel_information
+    fit.fresnel_unit_error
         .iter()
-        .map(|info| {
-            info.map(|i| {
-                if i > 0.0 {
-                    fit.relative_rms / i.sqrt()
+        .zip(&fit.fresnel_information)
+        .map(|(unit, info)| {
+            std::array::from_fn(|c| {
+                if info[c] > 0.0 {
+                    fit.relative_rms * unit[c]
                 } else {
                     f64::INFINITY
                 }
@@ -166,10 +167,8 @@ fn boards_csv(data: &Measurements, fit: &FitResult) -> String {
 fn fresnel_csv(fit: &FitResult) -> String {
     let errors = fresnel_std_errors(fit);
     let mut csv = String::from("angle_deg,r,g,b,measured,std_error_r,std_error_g,std_error_b\n");
-    for k in 0..FRESNEL_KNOTS {
-        let [r, g, b] = fit.fresnel.rgb()[k];
-        let measured = fit.fresnel_information[k].iter().all(|&i| i > 0.0);
-        let [er, eg, eb] = errors[k];
+    for (k, ([r, g, b], [er, eg, eb])) in fit.fresnel.rgb().iter().zip(&errors).enumerate() {
+        let measured = fit.fresnel_measured(k);
         let _ = writeln!(csv, "{k},{r},{g},{b},{},{er},{eg},{eb}", u8::from(measured));
     }
     csv
@@ -185,11 +184,12 @@ fn markdown(
     let mut md = format!("# Lacquer fit of `{}`\n\n", data.source);
     let _ = writeln!(
         md,
-        "{} rows on {} board(s); {} fitted, {} left out as grazing (beyond 87°).\n",
+        "{} rows on {} board(s); {} fitted, {} left out as grazing (beyond {}°).\n",
         data.rows.len(),
         data.samples.len(),
         fit.rows.len(),
-        fit.grazing_rows
+        fit.grazing_rows,
+        super::estimate::GRAZING_LIMIT_DEG
     );
     let _ = writeln!(md, "## Parameters\n\n| parameter | value |\n|---|---|");
     let [c0, c1, c2] = m.lacquer_law;
@@ -234,7 +234,7 @@ fn markdown(
         );
     }
     let measured: Vec<usize> = (0..FRESNEL_KNOTS)
-        .filter(|&k| fit.fresnel_information[k].iter().all(|&i| i > 0.0))
+        .filter(|&k| fit.fresnel_measured(k))
         .collect();
     let _ = writeln!(
         md,

@@ -31,7 +31,7 @@ pub const FRESNEL_KNOTS: usize = 91;
 /// any goniometer's angular resolution.
 pub const BECKMANN_M_RANGE: (f64, f64) = (0.005, 1.0);
 /// Curvature penalty relative to the mean data weight of the measured knots.
-const CURVATURE_PENALTY: f64 = 1e-6;
+const CURVATURE_PENALTY: f64 = 1e-8;
 
 /// What one row contributes, independent of the parameters.
 #[derive(Clone, Copy, Debug)]
@@ -102,6 +102,10 @@ pub struct LinearSolution {
     /// Per knot and channel: the data's weight on the knot (the normal matrix's diagonal); 0 for
     /// a knot no row reaches.
     pub fresnel_information: Vec<[f64; 3]>,
+    /// Per knot and channel: √(A⁻¹)_kk, F's standard error per unit relative noise (the weights
+    /// are 1/value², so σ_F = σ_relative × this). Large where only the curvature penalty fixes
+    /// the knot (between measured angles, or two knots only one θ reaches). Empty unless asked.
+    pub fresnel_unit_error: Vec<[f64; 3]>,
     /// J(m): the weighted sum of squared residuals over all channels.
     pub objective: f64,
 }
@@ -116,6 +120,16 @@ impl Separation<'_> {
     /// The linear solve for one m; None when the normal equations are singular (the data do not
     /// fix some diffuse or Fresnel unknown).
     pub fn solve(&self, beckmann_m: f64) -> Option<LinearSolution> {
+        self.solve_inner(beckmann_m, false)
+    }
+
+    /// [`Separation::solve`] with [`LinearSolution::fresnel_unit_error`] (91 more solves per
+    /// channel: for the final m only).
+    pub fn solve_with_errors(&self, beckmann_m: f64) -> Option<LinearSolution> {
+        self.solve_inner(beckmann_m, true)
+    }
+
+    fn solve_inner(&self, beckmann_m: f64, with_errors: bool) -> Option<LinearSolution> {
         let s2 = 2 * self.sample_count;
         let n = s2 + FRESNEL_KNOTS;
         let mut normal = [(); 3].map(|_| SymmetricMatrix::zeros(n));
@@ -141,12 +155,24 @@ impl Separation<'_> {
         }
         let mut solved = Vec::with_capacity(3);
         let mut information = vec![[0.0; 3]; FRESNEL_KNOTS];
+        let mut unit_error = if with_errors {
+            vec![[0.0; 3]; FRESNEL_KNOTS]
+        } else {
+            Vec::new()
+        };
         for c in 0..3 {
             for (k, info) in information.iter_mut().enumerate() {
                 info[c] = normal[c].get(s2 + k, s2 + k);
             }
             regularise(&mut normal[c], &mut rhs[c], s2);
-            solved.push(normal[c].solve(&rhs[c])?);
+            let factor = normal[c].cholesky()?;
+            solved.push(factor.solve(&rhs[c]));
+            if with_errors {
+                let variances = factor.inverse_diagonal(s2..s2 + FRESNEL_KNOTS);
+                for (e, v) in unit_error.iter_mut().zip(variances) {
+                    e[c] = v.max(0.0).sqrt();
+                }
+            }
         }
         let diffuse = (0..self.sample_count)
             .map(|s| std::array::from_fn(|c| [solved[c][2 * s], solved[c][2 * s + 1]]))
@@ -159,6 +185,7 @@ impl Separation<'_> {
             diffuse,
             fresnel,
             fresnel_information: information,
+            fresnel_unit_error: unit_error,
             objective: 0.0,
         };
         solution.objective = self.objective(&solution);
@@ -190,7 +217,7 @@ impl Separation<'_> {
         if !best.is_finite() {
             return None;
         }
-        let solution = self.solve(log_m.exp())?;
+        let solution = self.solve_with_errors(log_m.exp())?;
         let grid = grid.into_iter().map(|(x, j)| (x.exp(), j)).collect();
         Some(BeckmannSearch { solution, grid })
     }

@@ -94,7 +94,8 @@ pub fn material_to_toml(material: &LacquerMaterial, fresnel_file_name: Option<&s
     let [c0, c1, c2] = material.lacquer_law;
     let [kr, kg, kb] = material.albedo;
     let mut out = String::from(
-        "# A shikki lacquer material (SPEC §2–4). Keys left out keep the values of `preset`.\n",
+        "# A shikki lacquer material (SPEC §2–4). Every key is written; in a hand-written file, keys\n\
+         # left out keep the values of `preset` (default smooth-black).\n",
     );
     let mut line = |key: &str, value: String| out.push_str(&format!("{key} = {value}\n"));
     line("m", number(material.beckmann_m));
@@ -177,14 +178,21 @@ impl Value {
         }
     }
 
-    fn type_name(&self) -> &'static str {
-        match self {
+    /// The type with its article, for "found …".
+    fn type_name(&self) -> String {
+        let name = match self {
             Value::Number(_) => "number",
             Value::Bool(_) => "boolean",
             Value::Str(_) => "string",
             Value::Array(_) => "array",
             Value::Other(name) => name,
-        }
+        };
+        let article = if name.starts_with(['a', 'e', 'i', 'o', 'u']) {
+            "an"
+        } else {
+            "a"
+        };
+        format!("{article} {name}")
     }
 }
 
@@ -199,7 +207,11 @@ impl Spans<'_> {
     fn error(&self, span: Option<&Range<usize>>, key: &str, message: &str) -> Error {
         match span {
             Some(span) => Located::new(self.text, Some(span.clone())).error(self.source, message),
-            None => Error::invalid(format!("{}: key `{key}`", self.source), key, message),
+            None => Error::invalid(
+                format!("material in {}", self.source),
+                format!("`{key}`"),
+                message,
+            ),
         }
     }
 }
@@ -240,7 +252,7 @@ fn build(entries: Vec<Entry>, spans: &Spans, base_dir: &Path) -> Result<LacquerM
                 .map_err(|e| spans.error(entry.value_span.as_ref(), &entry.key, &e.to_string()))?,
             other => {
                 let message = format!(
-                    "`preset` must be a string such as \"smooth-red\", found a {}",
+                    "`preset` must be a string such as \"smooth-red\", found {}",
                     other.type_name()
                 );
                 return Err(spans.error(entry.value_span.as_ref(), &entry.key, &message));
@@ -279,7 +291,7 @@ fn apply(
     let at_value = |message: &str| spans.error(entry.value_span.as_ref(), key, message);
     let wrong_type = |expected: &str| {
         at_value(&format!(
-            "`{key}` must be {expected}, found a {}",
+            "`{key}` must be {expected}, found {}",
             entry.value.type_name()
         ))
     };
@@ -356,4 +368,198 @@ fn edit_distance(a: &str, b: &str) -> usize {
         }
     }
     row[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<LacquerMaterial> {
+        material_from_toml_str(text, Path::new("/base"), "m.toml")
+    }
+
+    fn parse_error(text: &str) -> (usize, String) {
+        match parse(text) {
+            Err(Error::Parse {
+                file,
+                line,
+                message,
+            }) => {
+                assert_eq!(file, "m.toml");
+                (line, message)
+            }
+            other => panic!("expected a parse error for {text:?}, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn preset_then_keys_then_validate() {
+        let m = parse(
+            "preset = \"rough-red\"\nm = 0.3\nkd = [0.1, 0.2, 0.3]\nextrapolate_g = true\nr = 7\n",
+        )
+        .unwrap();
+        let expected = LacquerMaterial {
+            beckmann_m: 0.3,
+            albedo: [0.1, 0.2, 0.3],
+            extrapolate_g: true,
+            lacquer_ratio: 7.0,
+            ..LacquerMaterial::preset("rough-red").unwrap()
+        };
+        assert_eq!(m, expected);
+        // No preset: smooth-black; integers are numbers.
+        let m = parse("b = 1\n").unwrap();
+        assert_eq!(m.diffuse_b, 1.0);
+        assert_eq!(m.beckmann_m, LacquerMaterial::default().beckmann_m);
+    }
+
+    #[test]
+    fn written_file_reads_back_identically() {
+        // Every field off its preset value, written and read: exactly equal (Debug formatting of
+        // f64 is the shortest text that parses to the same bits).
+        let m = LacquerMaterial {
+            beckmann_m: 0.123_456_789_012_345_67,
+            diffuse_a: -0.031,
+            diffuse_b: 1.0000000000000002,
+            lacquer_law: [1.2, -0.2, 0.01],
+            lacquer_ratio: 2.5,
+            albedo: [0.5, 0.06, 1e-7],
+            extrapolate_g: true,
+            ior_a: 1.6,
+            ior_b: 0.01,
+            fresnel_file: None,
+            beta_normal: 0.4,
+            beta_grazing: 0.02,
+            beta_power: 2.0,
+        };
+        let text = material_to_toml(&m, None);
+        assert_eq!(parse(&text).unwrap(), m);
+        assert!(!text.contains("fresnel"));
+    }
+
+    #[test]
+    fn fresnel_paths_resolve_against_the_file_directory() {
+        let dir = std::env::temp_dir().join(format!("shikki-material-file-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let table = FresnelTable::new(vec![0.0, 90.0], vec![[0.04; 3], [1.0; 3]]).unwrap();
+        std::fs::write(dir.join("t.csv"), table.to_csv()).unwrap();
+        let toml_path = dir.join("lacquer.toml");
+        std::fs::write(&toml_path, "fresnel = \"t.csv\"\n").unwrap();
+        let m = load_material_file(&toml_path).unwrap();
+        assert_eq!(m.fresnel_file, Some(dir.join("t.csv")));
+        assert_eq!(m.fresnel_table().unwrap(), table);
+        // The writer names the file it is given.
+        let text = material_to_toml(&m, Some("t.csv"));
+        assert!(text.contains("fresnel = \"t.csv\"\n"), "{text}");
+        // A missing table is an error at the `fresnel` line.
+        std::fs::write(&toml_path, "m = 0.1\nfresnel = \"missing.csv\"\n").unwrap();
+        let err = load_material_file(&toml_path).unwrap_err().to_string();
+        assert!(
+            err.starts_with(&format!(
+                "{}:2: column 11: cannot read",
+                toml_path.display()
+            )),
+            "{err}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn unknown_key_names_line_column_and_nearest() {
+        let (line, message) = parse_error("m = 0.1\n  bta_normal = 0.2\n");
+        assert_eq!(line, 2);
+        assert!(
+            message.starts_with("column 3: unknown key `bta_normal`; valid keys are preset, m, a,"),
+            "{message}"
+        );
+        assert!(
+            message.ends_with("did you mean `beta_normal`?"),
+            "{message}"
+        );
+    }
+
+    #[test]
+    fn wrong_types_say_what_is_expected() {
+        let cases = [
+            (
+                "m = \"0.1\"",
+                "column 5: `m` must be a number, found a string",
+            ),
+            (
+                "kd = [0.1, 0.2]",
+                "column 6: `kd` must be an array of three numbers [r, g, b], found an array",
+            ),
+            (
+                "kd = 0.5",
+                "column 6: `kd` must be an array of three numbers [r, g, b], found a number",
+            ),
+            (
+                "extrapolate_g = 1",
+                "column 17: `extrapolate_g` must be a boolean (true or false), found a number",
+            ),
+            (
+                "fresnel = 3",
+                "column 11: `fresnel` must be a string (the path of a Fresnel CSV), found a number",
+            ),
+            (
+                "preset = 1",
+                "column 10: `preset` must be a string such as \"smooth-red\", found a number",
+            ),
+            (
+                "m = { x = 1 }",
+                "column 5: `m` must be a number, found a table",
+            ),
+        ];
+        for (text, expected) in cases {
+            assert_eq!(parse_error(text), (1, expected.to_string()), "{text}");
+        }
+    }
+
+    #[test]
+    fn field_rules_come_from_the_material() {
+        // `set`'s own message, at the value's position.
+        let (line, message) = parse_error("a = 1\nm = 1.5\n");
+        assert_eq!(line, 2);
+        assert!(
+            message
+                .starts_with("column 5: invalid m = 1.5: the Beckmann RMS slope must be in (0, 1]"),
+            "{message}"
+        );
+        // A cross-field rule (validate) points at the key that broke it.
+        let (line, message) = parse_error("preset = \"smooth\"\n\nr = 6.5\n");
+        assert_eq!(line, 3);
+        assert!(
+            message.starts_with("column 1: invalid r = 6.5: must be in [1, "),
+            "{message}"
+        );
+        let (_, message) = parse_error("preset = \"smoth\"");
+        assert!(message.contains("did you mean `smooth`"), "{message}");
+    }
+
+    #[test]
+    fn toml_syntax_errors_have_a_position() {
+        let (line, message) = parse_error("m = 0.1\nb = = 2\n");
+        assert_eq!(line, 2);
+        assert!(message.starts_with("column "), "{message}");
+    }
+
+    #[test]
+    fn plain_tables_work_without_spans() {
+        let table: toml::Table = toml::from_str("preset = \"rough\"\nc0 = 1.1\n").unwrap();
+        let m = material_from_toml_table(&table, Path::new("."), "scene.toml").unwrap();
+        assert_eq!(m.lacquer_law[0], 1.1);
+        let table: toml::Table = toml::from_str("mm = 0.1\n").unwrap();
+        let err = material_from_toml_table(&table, Path::new("."), "scene.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("scene.toml") && err.contains("did you mean `m`?"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn edit_distance_spot_values() {
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+        assert_eq!(edit_distance("", "ab"), 2);
+    }
 }

@@ -22,10 +22,8 @@ use super::mesh::Mesh;
 
 /// Default segments around the axis for both built-ins.
 pub const LATHE_SEGMENTS_AROUND: u32 = 256;
-/// Default profile segments for the bowl: 256·(2·196 − 2) = 99 840 triangles (SPEC §5: ~100k).
-pub const BOWL_PROFILE_SEGMENTS: u32 = 196;
-/// The plate's profile is shorter and flatter; 160 segments keep a similar edge length.
-pub const PLATE_PROFILE_SEGMENTS: u32 = 160;
+/// Default profile segments for both: 256·(2·196 − 2) = 99 840 triangles (SPEC §5: ~100k).
+pub const LATHE_PROFILE_SEGMENTS: u32 = 196;
 
 /// Profile units per centimetre: 1 unit = 10 cm.
 const UNITS_PER_CM: f64 = 0.1;
@@ -332,8 +330,8 @@ pub fn plate_profile() -> Profile {
     let flare = 16f64.to_radians();
     let wall_up = DVec2::new(flare.sin(), flare.cos());
     let (lip, lip_inner, lip_outer) = rim(9.0, 2.4, 0.17, flare);
-    let floor_centre = DVec2::new(0.0, 0.95);
-    let floor_edge = DVec2::new(6.0, 0.95);
+    let floor_centre = DVec2::new(0.0, 1.05);
+    let floor_edge = DVec2::new(6.0, 1.05);
     let foot_top = DVec2::new(5.5, 0.55);
     let foot_outer = DVec2::new(5.55, 0.0);
     let foot_inner = DVec2::new(5.05, 0.0);
@@ -382,4 +380,124 @@ pub fn bowl(around: u32, profile_segments: u32) -> Mesh {
 /// The built-in plate at a chosen tessellation.
 pub fn plate(around: u32, profile_segments: u32) -> Mesh {
     revolve(&plate_profile().sample(profile_segments), around)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cylinder of radius 1 cm, height 1 cm, as three runs (top, side, bottom) with creases at
+    /// both rims, walked with the solid on the right.
+    fn cylinder() -> Profile {
+        let (top_centre, top_rim) = (DVec2::new(0.0, 1.0), DVec2::new(1.0, 1.0));
+        let (bottom_rim, bottom_centre) = (DVec2::new(1.0, 0.0), DVec2::new(0.0, 0.0));
+        Profile {
+            runs: vec![
+                vec![Piece::Line(top_centre, top_rim)],
+                vec![Piece::Line(top_rim, bottom_rim)],
+                vec![Piece::Line(bottom_rim, bottom_centre)],
+            ],
+        }
+    }
+
+    #[test]
+    fn cylinder_counts_normals_and_winding_match_the_hand_layout() {
+        // One segment per piece, 4 around: top = pole + ring (5 vertices, 4 triangles), side =
+        // 2 rings (8, 8), bottom = ring + pole (5, 4): 18 vertices, 16 triangles.
+        let mesh = revolve(&cylinder().sample(3), 4);
+        assert_eq!(mesh.positions.len(), 18);
+        assert_eq!(mesh.triangle_count(), 16);
+        mesh.validate().unwrap();
+        // Normals: top +Y, bottom −Y, side radial (y = 0, along the position's xz). Exact: the
+        // profile's lines are axis-aligned, and cos/sin of multiples of 90° round to 0 or ±1
+        // within 1e-7 in f32.
+        for (p, n) in mesh.positions.iter().zip(&mesh.normals) {
+            let p = DVec3::from_array(p.map(f64::from));
+            let n = DVec3::from_array(n.map(f64::from));
+            let radial = DVec3::new(p.x, 0.0, p.z) / 0.1;
+            let ok = (n - DVec3::Y).length() < 1e-7
+                || (n + DVec3::Y).length() < 1e-7
+                || (n - radial).length() < 1e-7;
+            assert!(ok, "normal {n} at {p}");
+        }
+        // Winding: every triangle's (b−a)×(c−a) agrees with its vertices' normals.
+        for t in mesh.indices.chunks_exact(3) {
+            let [a, b, c] =
+                [0, 1, 2].map(|k| DVec3::from_array(mesh.positions[t[k] as usize].map(f64::from)));
+            let face = (b - a).cross(c - a);
+            for &i in t {
+                let n = DVec3::from_array(mesh.normals[i as usize].map(f64::from));
+                assert!(
+                    face.dot(n) > 0.0,
+                    "triangle {t:?} faces away from its normals"
+                );
+            }
+        }
+        // Units: 1 cm = 0.1; the top is at y = 0.1 and the widest ring has radius 0.1.
+        assert!((mesh.bounding_radius() - 0.1 * 2f64.sqrt()).abs() < 1e-7);
+    }
+
+    #[test]
+    fn allocation_is_proportional_with_at_least_one_each() {
+        assert_eq!(allocate(&[1.0, 1.0, 2.0], 8), vec![2, 2, 4]);
+        // 10 × 0.2/10.2 ≈ 0.196 → raised to 1; 9.80 floors to 9, and the total 10 is reached.
+        assert_eq!(allocate(&[0.2, 10.0], 10), vec![1, 9]);
+        assert_eq!(allocate(&[1.0, 1.0, 1.0], 3), vec![1, 1, 1]);
+    }
+
+    #[test]
+    fn arc_and_bezier_tangents_match_their_closed_forms() {
+        // Quarter arc from (1,0) to (0,1) about the origin: tangent at angle a is (−sin a, cos a).
+        let arc = Piece::Arc(DVec2::ZERO, 1.0, 0.0, PI / 2.0);
+        let a = PI / 6.0;
+        assert!((arc.tangent(1.0 / 3.0) - DVec2::new(-a.sin(), a.cos())).length() < 1e-12);
+        assert!((arc.point(1.0) - DVec2::new(0.0, 1.0)).length() < 1e-12);
+        // A Bézier's end tangents point along its first and last control legs.
+        let bezier = Piece::Bezier([
+            DVec2::ZERO,
+            DVec2::new(2.0, 0.0),
+            DVec2::new(3.0, 1.0),
+            DVec2::new(3.0, 3.0),
+        ]);
+        assert_eq!(bezier.tangent(0.0), DVec2::X);
+        assert_eq!(bezier.tangent(1.0), DVec2::Y);
+        // (P0 + 3·P1 + 3·P2 + P3)/8 = ((0 + 6 + 9 + 3)/8, (0 + 0 + 3 + 3)/8).
+        assert_eq!(bezier.point(0.5), DVec2::new(2.25, 0.75));
+        // Coincident control points: the chord gives the direction.
+        let pinched = Piece::Bezier([DVec2::ZERO, DVec2::ZERO, DVec2::new(1.0, 0.0), DVec2::X]);
+        assert!((pinched.tangent(0.0) - DVec2::X).length() < 1e-6);
+        // Reversal swaps the ends and the direction.
+        assert_eq!(bezier.reversed().tangent(0.0), -DVec2::Y);
+    }
+
+    #[test]
+    fn built_in_profiles_are_closed_and_g1_inside_runs() {
+        for profile in [bowl_profile(), plate_profile()] {
+            let pieces: Vec<&Piece> = profile.runs.iter().flatten().collect();
+            // Starts and ends on the axis, horizontal there (so the poles are smooth).
+            assert_eq!(pieces[0].point(0.0).x, 0.0);
+            assert_eq!(pieces[pieces.len() - 1].point(1.0).x, 0.0);
+            assert!(pieces[0].tangent(0.0).y.abs() < 1e-12);
+            assert!(pieces[pieces.len() - 1].tangent(1.0).y.abs() < 1e-12);
+            // Consecutive pieces share their end points (1e-12 cm: the same arithmetic).
+            for pair in pieces.windows(2) {
+                assert!((pair[0].point(1.0) - pair[1].point(0.0)).length() < 1e-12);
+            }
+            // Inside a run the tangent is continuous (1e-9 rad); across runs it is not (a crease
+            // of more than 30°: the foot ring's corners are deliberate).
+            for run in &profile.runs {
+                for pair in run.windows(2) {
+                    let turn = pair[0].tangent(1.0).angle_to(pair[1].tangent(0.0)).abs();
+                    assert!(turn < 1e-9, "run not smooth: {turn} rad");
+                }
+            }
+            for pair in profile.runs.windows(2) {
+                let (Some(end), Some(start)) = (pair[0].last(), pair[1].first()) else {
+                    panic!("empty run");
+                };
+                let turn = end.tangent(1.0).angle_to(start.tangent(0.0)).abs();
+                assert!(turn > 30f64.to_radians(), "crease of only {turn} rad");
+            }
+        }
+    }
 }

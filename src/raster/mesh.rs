@@ -8,7 +8,7 @@
 
 use std::f64::consts::PI;
 
-use super::lathe::{self, BOWL_PROFILE_SEGMENTS, LATHE_SEGMENTS_AROUND, PLATE_PROFILE_SEGMENTS};
+use super::lathe::{self, LATHE_PROFILE_SEGMENTS, LATHE_SEGMENTS_AROUND};
 use crate::{Error, Result};
 
 /// An indexed triangle list; `normals[i]` belongs to `positions[i]`.
@@ -203,8 +203,8 @@ impl BuiltinMesh {
         match self {
             BuiltinMesh::Sphere => sphere(SPHERE_SEGMENTS_AROUND, SPHERE_SEGMENTS_DOWN),
             BuiltinMesh::Board => board(),
-            BuiltinMesh::Bowl => lathe::bowl(LATHE_SEGMENTS_AROUND, BOWL_PROFILE_SEGMENTS),
-            BuiltinMesh::Plate => lathe::plate(LATHE_SEGMENTS_AROUND, PLATE_PROFILE_SEGMENTS),
+            BuiltinMesh::Bowl => lathe::bowl(LATHE_SEGMENTS_AROUND, LATHE_PROFILE_SEGMENTS),
+            BuiltinMesh::Plate => lathe::plate(LATHE_SEGMENTS_AROUND, LATHE_PROFILE_SEGMENTS),
         }
     }
 }

@@ -94,3 +94,30 @@ pub fn quantile(values: &mut [f64], q: f64) -> f64 {
     let rank = ((q * values.len() as f64).ceil() as usize).clamp(1, values.len());
     values[rank - 1]
 }
+
+/// A test environment with the features that break naive prefilters: a small bright disc
+/// (radius 3°, 50× the sky, towards (0.3, 0.5, −0.81)), a smooth gradient in the sky, and a hard
+/// horizon (ground 10× darker than the sky just above it).
+pub fn synthetic_environment(width: u32, height: u32) -> shikki::environment::Equirect {
+    use glam::DVec3;
+    let sun = DVec3::new(0.3, 0.5, -0.81).normalize();
+    let cos_disc = 3f64.to_radians().cos();
+    shikki::environment::Equirect::from_fn(width, height, move |d: DVec3| {
+        if d.dot(sun) >= cos_disc {
+            return [50.0, 45.0, 40.0];
+        }
+        if d.y < 0.0 {
+            return [0.08, 0.06, 0.04];
+        }
+        let t = d.y as f32;
+        let azimuth = (0.5 + 0.5 * d.x) as f32;
+        [0.8 + 0.4 * azimuth - 0.3 * t, 0.9 - 0.2 * t, 1.0 + 0.5 * t]
+    })
+}
+
+/// Relative error |a − b| / max(|b|, floor), per channel, worst of the three.
+pub fn rel_err(a: [f32; 4], b: [f32; 4], floor: f64) -> f64 {
+    (0..3)
+        .map(|c| (f64::from(a[c]) - f64::from(b[c])).abs() / f64::from(b[c]).abs().max(floor))
+        .fold(0.0, f64::max)
+}

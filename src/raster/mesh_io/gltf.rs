@@ -3,9 +3,10 @@
 //!
 //! Walks the default scene (else the first scene, else every root node) applying node
 //! transforms, and takes every triangle primitive of every mesh instance. The crate parses and
-//! validates the JSON and loads the buffers; this file reads the accessors itself, with every
-//! offset, stride and count checked, because the crate's readers assume well-formed data (they
-//! can overflow or assert on a hostile file). Owns nothing else; the clean-up is `MeshBuilder`'s.
+//! validates the JSON; `gltf_buffers` splits GLB and loads the buffers; this file reads the
+//! accessors itself, with every offset, stride and count checked, because the crate's readers
+//! assume well-formed data (they can overflow or assert on a hostile file). Owns nothing else;
+//! the clean-up is `MeshBuilder`'s.
 //!
 //! Decisions the spec leaves open: POINTS and LINES* primitives are skipped with a note; strips
 //! and fans become lists; a node whose transform is singular (scale 0, used to hide things) is
@@ -22,8 +23,8 @@ use ::gltf::{Accessor, Document, Gltf, Node, Primitive};
 use glam::{DMat4, DVec3};
 
 use super::{
-    content_error, mirrors, reverse_winding, transform_normal, LoadReport, MeshBuilder, Part,
-    MAX_TRIANGLES, MAX_VERTICES,
+    content_error, gltf_buffers, mirrors, reverse_winding, transform_normal, LoadReport,
+    MeshBuilder, Part, MAX_TRIANGLES, MAX_VERTICES,
 };
 use crate::raster::mesh::Mesh;
 use crate::{Error, Result};
@@ -42,17 +43,19 @@ pub(super) fn load(path: &Path) -> Result<(Mesh, LoadReport)> {
         path: path.to_path_buf(),
         source,
     })?;
-    let Gltf { document, blob } = Gltf::from_slice(&bytes).map_err(|e| crate_error(path, e))?;
+    let (json, blob) = gltf_buffers::split_container(path, &bytes)?;
+    let Gltf { document, .. } =
+        Gltf::from_slice_without_validation(json).map_err(|e| crate_error(path, e))?;
     drop(bytes);
+    check_position_references(path, document.as_json())?;
+    let document = Document::from_json(document.into_json()).map_err(|e| crate_error(path, e))?;
 
     let mut builder = MeshBuilder::new(path);
     let instances = scene_instances(path, &document, &mut builder.report)?;
     check_limits(path, &instances)?;
 
     // Buffers only now: a file over the limits fails before its .bin is read.
-    let base = path.parent().unwrap_or_else(|| Path::new("."));
-    let buffers = ::gltf::import_buffers(&document, Some(base), blob)
-        .map_err(|e| buffer_error(path, &document, e))?;
+    let buffers = gltf_buffers::load_buffers(path, &document, blob)?;
     let buffers: Vec<&[u8]> = buffers.iter().map(|b| &b[..]).collect();
 
     let mut skipped_modes = Vec::new();
@@ -79,6 +82,31 @@ pub(super) fn load(path: &Path) -> Result<(Mesh, LoadReport)> {
         ));
     }
     builder.finish()
+}
+
+/// gltf-json 1.4.1's validation indexes `accessors[POSITION]` before checking the index (and
+/// panics on a dangling one), so those references are checked here first.
+fn check_position_references(path: &Path, root: &::gltf::json::Root) -> Result<()> {
+    use ::gltf::json::validation::Checked;
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive
+                .attributes
+                .get(&Checked::Valid(Semantic::Positions));
+            if let Some(index) = position.filter(|i| i.value() >= root.accessors.len()) {
+                return Err(content_error(
+                    path,
+                    format!(
+                        "invalid glTF: meshes[{m}].primitives[{p}].attributes.POSITION: accessor \
+                         {} does not exist ({} accessors)",
+                        index.value(),
+                        root.accessors.len()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// "mesh 2 'Lid' primitive 0", the location every error names.
@@ -189,12 +217,15 @@ fn check_limits(path: &Path, instances: &[Instance<'_>]) -> Result<()> {
                     format!("{place} has no POSITION attribute"),
                 ));
             };
-            let n = primitive.indices().map_or(positions.count(), |a| a.count());
+            let (n, listed) = match primitive.indices() {
+                Some(indices) => (indices.count(), "indices"),
+                None => (positions.count(), "vertices (no indices)"),
+            };
             let count = match primitive.mode() {
                 Mode::Triangles if n % 3 != 0 => {
                     return Err(content_error(
                         path,
-                        format!("{place}: {n} vertices in TRIANGLES mode is not a multiple of 3"),
+                        format!("{place}: {n} {listed} in TRIANGLES mode is not a multiple of 3"),
                     ))
                 }
                 Mode::Triangles => n / 3,
@@ -462,24 +493,4 @@ fn crate_error(path: &Path, error: ::gltf::Error) -> Error {
         }
         other => content_error(path, format!("not a readable glTF/GLB file: {other}")),
     }
-}
-
-fn buffer_error(path: &Path, document: &Document, error: ::gltf::Error) -> Error {
-    let sources: Vec<String> = document
-        .buffers()
-        .map(|b| match b.source() {
-            ::gltf::buffer::Source::Bin => format!("buffer {}: the GLB BIN chunk", b.index()),
-            ::gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
-                format!("buffer {}: an embedded data: URI", b.index())
-            }
-            ::gltf::buffer::Source::Uri(uri) => format!("buffer {}: {uri:?}", b.index()),
-        })
-        .collect();
-    content_error(
-        path,
-        format!(
-            "cannot load its buffers ({}): {error}; external buffer files are looked up next to the glTF file",
-            sources.join(", ")
-        ),
-    )
 }

@@ -19,6 +19,7 @@
 //!   declared counts before the mesh is allocated.
 
 mod gltf;
+mod gltf_buffers;
 pub mod normals;
 mod obj;
 
