@@ -25,6 +25,7 @@ pub mod model;
 pub mod oracle;
 pub mod output;
 pub mod raster;
+pub mod scene;
 pub mod shading;
 
 pub use error::{Error, Result};

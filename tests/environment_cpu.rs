@@ -1,16 +1,20 @@
 //! The CPU side of the environment (issue 3), without a GPU: the prefilter oracle against SPEC §4's
 //! definition on a synthetic map, seams at cube edges, and the real HDRIs of `../shared/env`
-//! (plus Debian's DWAB original when blender-data is installed). The timing of the oracle at
-//! face 512, K = 8 is an ignored test:
-//! `cargo test --release --test environment_cpu -- --ignored --nocapture`.
+//! (plus Debian's DWAB original when blender-data is installed), and OpenEXR decoding through
+//! every compression the `exr` crate writes. The timing of the oracle at
+//! face 512, K = 8 is a benchmark: `cargo bench --bench prefilter`.
 
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
+use exr::prelude::{
+    f16, Blocks, Compression, Encoding, Image, Layer, LayerAttributes, LineOrder, SpecificChannels,
+    Vec2, WritableImage,
+};
 use glam::DVec3;
 use shikki::environment::cube::{face_direction, texel_coord, texel_direction};
 use shikki::environment::definition::{irradiance_definition, prefiltered_radiance_definition};
-use shikki::environment::load::{decode_exr, load_environment};
+use shikki::environment::load::{decode_environment, decode_exr, load_environment};
 use shikki::environment::{
     prefilter_cpu, CubeImage, Equirect, PrefilterParams, PrefilteredEnvironment,
 };
@@ -54,12 +58,12 @@ fn synthetic() -> &'static (Equirect, PrefilteredEnvironment) {
 }
 
 /// The deterministic subset of a cube's texels compared with the brute-force definition: every
-/// `stride`-th index, stride odd (so it walks across rows and faces of a power-of-two cube) and
-/// at least 7, chosen so no layer needs more than ~1500 evaluations of the definition.
+/// texel of a small cube, every `stride`-th of a large one, stride odd (so it walks across rows
+/// and faces of a power-of-two cube), chosen so no cube needs more than ~2000 evaluations.
 fn subset(cube: &CubeImage) -> Vec<(usize, u32, u32)> {
     let m = cube.face_size as usize;
     let count = 6 * m * m;
-    let stride = (count / 1500).max(7) | 1;
+    let stride = (count / 1000) | 1;
     (0..count)
         .step_by(stride)
         .map(|index| {
@@ -289,11 +293,14 @@ fn studio_exr_and_hdr_agree_to_rgbe_precision() {
     let hdr = load_environment(shared_env("studio.hdr").to_str().unwrap()).unwrap();
     assert_eq!((exr.image.width, exr.image.height), (1024, 512));
     assert_eq!((hdr.image.width, hdr.image.height), (1024, 512));
-    assert_eq!((exr.replaced_pixels, hdr.replaced_pixels), (0, 0));
-    // RGBE stores each pixel's channels as 8-bit mantissas of a shared exponent: the step is
-    // max(rgb)/128 at most. Where a channel is bright (≥ ¼ of the pixel's largest, and the pixel
-    // not black), that step is ≤ 1/32 of the channel… the bound below is the measured behaviour,
-    // half an RGBE step plus half-float rounding, per channel.
+    // The EXR (decoded from DWAB, whose DCT rings) has three pixels with a red of −6e-8 … −3e-6;
+    // RGBE cannot store a negative.
+    assert_eq!((exr.replaced_pixels, hdr.replaced_pixels), (3, 0));
+    // RGBE stores a pixel's channels as 8-bit mantissas m of one exponent: one step is
+    // 2^(e−136), with the pixel's peak in [128, 256) steps. The file was written by truncating
+    // into that grid (as Radiance does), and we decode to the centre m + ½ (as Radiance does), so
+    // each channel is within ½ step of the EXR's half-float value, give or take that half's own
+    // rounding (2^-11 relative). Measured: 0.500 steps.
     let mut worst_steps = 0.0f64;
     let mut bright_sum = 0.0;
     let mut bright_count = 0usize;
@@ -318,7 +325,8 @@ fn studio_exr_and_hdr_agree_to_rgbe_precision() {
         "studio exr vs hdr: worst {worst_steps:.3} RGBE steps, bright mean {:.4} %",
         100.0 * bright_mean
     );
-    assert!(worst_steps <= 1.0, "{worst_steps} steps");
+    assert!(worst_steps <= 0.5 + 1e-3, "{worst_steps} steps");
+    // The issue's "within ~1 % where bright" (channels ≥ ¼ of a pixel's peak ≥ 0.01).
     assert!(bright_mean <= 0.01, "{bright_mean}");
 }
 
@@ -346,68 +354,144 @@ fn blender_dwab_original_decodes_like_its_piz_copy() {
         return;
     };
     let dwab = decode_exr(&bytes, "studio.exr").unwrap();
-    let piz = load_environment(shared_env("studio_piz.exr").to_str().unwrap())
-        .unwrap()
-        .image;
+    let piz_bytes = std::fs::read(shared_env("studio_piz.exr")).unwrap();
+    let piz = decode_exr(&piz_bytes, "studio_piz.exr").unwrap();
+    // The PIZ copy holds, in half, the pixels OpenEXR's own DWAB decoder produced: the `exr`
+    // crate's DWAB decoder must give back exactly those halves (measured: all 1,572,864 equal).
     assert_eq!((dwab.width, dwab.height), (piz.width, piz.height));
-    let mut worst = 0.0f64;
-    for (a, b) in dwab.pixels.iter().zip(&piz.pixels) {
-        for c in 0..3 {
-            worst = worst.max((a[c] - b[c]).abs() as f64 / (f64::from(b[c].abs()) + 1e-3));
-        }
+    let differing = dwab
+        .pixels
+        .iter()
+        .zip(&piz.pixels)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(differing, 0, "{differing} pixels differ");
+}
+
+fn error_text(result: shikki::Result<impl std::fmt::Debug>) -> String {
+    result.expect_err("must fail").to_string()
+}
+
+/// A 5 × 3 RGBA EXR whose pixel (x, y) is (x, y, x·y/4 − 1, 0.5) in the given sample type.
+fn exr_file(compression: Compression, half: bool) -> Vec<u8> {
+    let encoding = Encoding {
+        compression,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let value = |Vec2(x, y): Vec2<usize>| (x as f32, y as f32, (x * y) as f32 / 4.0 - 1.0, 0.5f32);
+    let mut bytes = Vec::new();
+    let cursor = std::io::Cursor::new(&mut bytes);
+    if half {
+        let channels = SpecificChannels::rgba(|p| {
+            let (r, g, b, a) = value(p);
+            (
+                f16::from_f32(r),
+                f16::from_f32(g),
+                f16::from_f32(b),
+                f16::from_f32(a),
+            )
+        });
+        let layer = Layer::new((5, 3), LayerAttributes::default(), encoding, channels);
+        Image::from_layer(layer)
+            .write()
+            .to_buffered(cursor)
+            .unwrap();
+    } else {
+        let channels = SpecificChannels::rgba(value);
+        let layer = Layer::new((5, 3), LayerAttributes::default(), encoding, channels);
+        Image::from_layer(layer)
+            .write()
+            .to_buffered(cursor)
+            .unwrap();
     }
-    println!("DWAB vs PIZ: worst relative difference {worst:e}");
-    // The PIZ copy holds the pixels OpenEXR's own DWAB decoder produced, in half: the `exr`
-    // crate's DWAB decoder must give the same halves.
-    assert!(worst <= 1e-3, "{worst}");
+    bytes
 }
 
 #[test]
-#[ignore = "timing, not a test: run with --release --ignored --nocapture"]
-fn oracle_time_face_512_eight_layers() {
-    use shikki::environment::oracle::{blur_layer, equirect_to_cube, irradiance, mip_chain};
-    use std::time::Instant;
-    let src = load_environment("builtin:studio").unwrap().image;
-    let params = PrefilterParams {
-        face_size: 512,
-        layers: 8,
-        beta_min: 0.02,
-        beta_max: 1.0,
-    };
-    let start = Instant::now();
-    let base = equirect_to_cube(&src, 512, 1.0, 0.0);
-    println!(
-        "equirect → cube 512: {:.3} s",
-        start.elapsed().as_secs_f64()
+fn exr_rgb_reads_in_half_and_float_with_any_lossless_compression() {
+    for compression in [
+        Compression::Uncompressed,
+        Compression::RLE,
+        Compression::ZIP16,
+        Compression::PIZ,
+        Compression::PXR24,
+    ] {
+        for half in [false, true] {
+            let image = decode_exr(&exr_file(compression, half), "t.exr").unwrap();
+            assert_eq!((image.width, image.height), (5, 3));
+            // Every value is exact in half (small integers and quarters).
+            assert_eq!(image.get(4, 2), [4.0, 2.0, 1.0]);
+            assert_eq!(image.get(1, 0), [1.0, 0.0, -1.0]);
+        }
+    }
+    // Through the sniffing entry point, the negative blue components are zeroed and counted:
+    // x·y/4 − 1 < 0 ⇔ x·y < 4: y = 0, all 5; y = 1, x = 0..=3 (4); y = 2, x = 0, 1 (2) → 11.
+    let loaded = decode_environment(&exr_file(Compression::ZIP1, false), "mem").unwrap();
+    assert_eq!(loaded.replaced_pixels, 11);
+    assert_eq!(loaded.image.get(1, 0), [1.0, 0.0, 0.0]);
+}
+
+#[test]
+fn exr_lossy_b44_and_b44a_decode_close_to_the_original() {
+    // B44 packs each 4×4 block of halves into 14 bytes, quantising the differences within the
+    // block: lossy, but on these smooth values the measured worst error is 4.9e-4. The bound,
+    // 1/64 of the value + 1/64, leaves margin for that and is still far below the spacing of
+    // neighbouring values (≥ 1/4), so a misplaced pixel or swapped channel fails.
+    for compression in [Compression::B44, Compression::B44A] {
+        let image = decode_exr(&exr_file(compression, true), "lossy.exr").unwrap();
+        for y in 0..3u32 {
+            for x in 0..5u32 {
+                let want = [x as f32, y as f32, (x * y) as f32 / 4.0 - 1.0];
+                let got = image.get(x, y);
+                for c in 0..3 {
+                    let bound = (want[c].abs() + 1.0) / 64.0;
+                    assert!(
+                        (got[c] - want[c]).abs() <= bound,
+                        "{compression:?} ({x}, {y}): {got:?}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Rewrites the value of the `compression` attribute of an EXR header (OpenEXR's
+/// "compression\0compression\0<size 1 as i32 LE><byte>").
+fn with_compression_byte(mut bytes: Vec<u8>, value: u8) -> Vec<u8> {
+    let key = b"compression\0compression\0\x01\0\0\0";
+    let at = bytes.windows(key.len()).position(|w| w == key).unwrap() + key.len();
+    bytes[at] = value;
+    bytes
+}
+
+#[test]
+fn htj2k_exr_names_the_compression_and_the_fix() {
+    // 11 = HTJ2K32 in OpenEXR 3.3's numbering; the header alone decides, before any pixel.
+    let bytes = with_compression_byte(exr_file(Compression::ZIP16, true), 11);
+    let message = error_text(decode_exr(&bytes, "j2k.exr"));
+    assert!(
+        message.contains("j2k.exr") && message.contains("ht j2k 32"),
+        "{message}"
     );
-    let t = Instant::now();
-    let mips = mip_chain(&base, &params);
-    println!("mip chain: {:.3} s", t.elapsed().as_secs_f64());
-    for (k, layer) in params.plan().iter().enumerate().skip(1) {
-        let t = Instant::now();
-        let mip = mips
-            .iter()
-            .find(|m| m.face_size == layer.face_size)
-            .unwrap();
-        blur_layer(mip, layer.beta);
-        println!(
-            "layer {k} (β {:.4}, face {}): {:.3} s",
-            layer.beta,
-            layer.face_size,
-            t.elapsed().as_secs_f64()
+    assert!(
+        message.contains("oiiotool in.exr --compression zip -o out.exr"),
+        "{message}"
+    );
+}
+
+#[test]
+fn truncated_or_foreign_exr_is_a_clear_error() {
+    let bytes = exr_file(Compression::ZIP16, false);
+    for cut in [10, bytes.len() / 2, bytes.len() - 4] {
+        let message = error_text(decode_exr(&bytes[..cut], "cut.exr"));
+        assert!(
+            message.contains("cut.exr") && message.contains("OpenEXR"),
+            "{message}"
         );
     }
-    let t = Instant::now();
-    irradiance(mips.iter().find(|m| m.face_size == 32).unwrap());
-    println!("irradiance: {:.3} s", t.elapsed().as_secs_f64());
-    println!(
-        "total (steps): {:.3} s on {} threads",
-        start.elapsed().as_secs_f64(),
-        rayon_threads()
-    );
-    let t = Instant::now();
-    prefilter_cpu(&src, &params, 1.0, 0.0).unwrap();
-    println!("prefilter_cpu: {:.3} s", t.elapsed().as_secs_f64());
+    let message = error_text(decode_exr(b"#?RADIANCE\n", "not.exr"));
+    assert!(message.contains("not.exr"), "{message}");
 }
 
 fn rayon_threads() -> usize {

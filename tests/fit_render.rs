@@ -18,7 +18,7 @@ use shikki::model::{BrdfParams, FresnelTable, LacquerMaterial};
 use shikki::oracle::{self, AnalyticShape, OracleScene};
 use shikki::output::HdrImage;
 use shikki::raster::camera::Camera;
-use shikki::raster::draw::{Background, DrawScene, LacquerRenderer, RenderSettings};
+use shikki::raster::draw::{Background, DrawObject, DrawScene, LacquerRenderer, RenderSettings};
 use shikki::raster::lights::Light;
 use shikki::raster::mesh;
 
@@ -129,14 +129,17 @@ fn fitted_material_renders_like_the_source_on_the_oracle_and_the_gpu() {
 
         let mut renderer = LacquerRenderer::new();
         let mut gpu_render = |(brdf, fresnel): &(BrdfParams, FresnelTable)| {
-            let scene = DrawScene {
+            let objects = [DrawObject {
                 mesh: &sphere,
-                camera: &camera,
-                lights: &lights,
                 brdf,
                 fresnel,
-                environment: None,
                 view_blur: ViewBlur::default(),
+            }];
+            let scene = DrawScene {
+                objects: &objects,
+                camera: &camera,
+                lights: &lights,
+                environment: None,
                 background: Background::Transparent,
             };
             let settings = RenderSettings {

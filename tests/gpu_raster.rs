@@ -11,7 +11,7 @@ use shikki::model::LacquerMaterial;
 use shikki::oracle::{self, intersect, AnalyticShape, OracleScene};
 use shikki::output::HdrImage;
 use shikki::raster::camera::Camera;
-use shikki::raster::draw::{Background, DrawScene, LacquerRenderer, RenderSettings};
+use shikki::raster::draw::{Background, DrawObject, DrawScene, LacquerRenderer, RenderSettings};
 use shikki::raster::lights::Light;
 use shikki::raster::mesh::{self, Mesh};
 
@@ -114,13 +114,15 @@ fn render_both(
         .render(
             gpu,
             &DrawScene {
-                mesh,
+                objects: &[DrawObject {
+                    mesh,
+                    brdf: &brdf,
+                    fresnel: &fresnel,
+                    view_blur: ViewBlur::default(),
+                }],
                 camera,
                 lights: &lights,
-                brdf: &brdf,
-                fresnel: &fresnel,
                 environment: None,
-                view_blur: ViewBlur::default(),
                 background: Background::Transparent,
             },
             &RenderSettings {

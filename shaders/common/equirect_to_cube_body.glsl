@@ -1,19 +1,20 @@
-// Step 1 of the prefilter: equirectangular radiance → cube face texels (bilinear, × intensity,
-// environment rotated about +Y). CPU twin: environment::oracle::equirect_to_cube.
+// Step 1 of the prefilter: equirectangular radiance → cube face texels, each the mean of S × S
+// sub-samples (the source pixel containing each), × intensity, the environment rotated about +Y.
+// CPU twin: environment::oracle::equirect_to_cube.
 //
 // Included by equirect_to_cube.comp (fp32) and equirect_to_cube_f64.comp (PRECISE_COORDINATES):
-// in fp32 the source position px ≈ u·W carries ~3e-5 px of rounding at W = 1024, which at a hard
-// HDR edge (neighbours 100× apart) is a 3e-3 relative error. With shaderFloat64 the direction, its
+// in fp32 the source position px ≈ u·W carries ~3e-5 px of rounding at W = 1024, so a sub-sample
+// near a pixel boundary can read the neighbouring pixel, which at a hard HDR edge (neighbours 100×
+// apart) is a visible error against the oracle. With shaderFloat64 the direction, its
 // angles and px are computed in double (GLSL has no double atan: the fp32 angle is refined by one
-// Newton step with double sin/cos polynomials), and only the bilinear mix runs in fp32.
+// Newton step with double sin/cos polynomials).
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 #include "cubemap.glsl"
 
-#ifndef SUPERSAMPLE
-#define SUPERSAMPLE 4u
-#endif
+// S = equirect_supersample(W, N) (src/environment/params.rs), from the push constants.
+#define SUPERSAMPLE params.supersample
 
 layout(push_constant) uniform Params {
     uint src_width;
@@ -22,6 +23,7 @@ layout(push_constant) uniform Params {
     float intensity;
     float rotation_cos;
     float rotation_sin;
+    uint supersample;
 } params;
 
 layout(std430, set = 0, binding = 0) readonly buffer Source { vec4 equirect[]; };

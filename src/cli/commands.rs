@@ -13,7 +13,7 @@ use crate::gpu::{ContextOptions, GpuContext};
 use crate::model::{lacquer_brdf, LacquerMaterial};
 use crate::output::{self, PngSettings};
 use crate::raster::camera::Camera;
-use crate::raster::draw::{DrawScene, LacquerRenderer, RenderSettings};
+use crate::raster::draw::{DrawObject, DrawScene, LacquerRenderer, RenderSettings};
 use crate::raster::lights::{default_lights, Light, MAX_LIGHTS};
 use crate::raster::mesh::BuiltinMesh;
 use crate::{Error, Result};
@@ -127,13 +127,15 @@ fn render_image(args: RenderArgs) -> Result<()> {
     let image = renderer.render(
         &gpu,
         &DrawScene {
-            mesh: &mesh,
+            objects: &[DrawObject {
+                mesh: &mesh,
+                brdf: &brdf,
+                fresnel: &fresnel,
+                view_blur: ViewBlur::of(&material),
+            }],
             camera: &camera,
             lights: &lights,
-            brdf: &brdf,
-            fresnel: &fresnel,
             environment: environment.as_ref(),
-            view_blur: ViewBlur::of(&material),
             background: args.background,
         },
         &RenderSettings {

@@ -3,7 +3,7 @@
 //! the CPU twin (`oracle.rs`) exists for tests and benchmarks only.
 
 use super::image::{CubeImage, Equirect, PrefilteredEnvironment};
-use super::params::{PrefilterParams, LOBE_CUTOFF};
+use super::params::{equirect_supersample, PrefilterParams, LOBE_CUTOFF};
 use crate::gpu::{
     Access, Binding, BindingKind, Buffer, BufferDesc, BufferUsage, ComputePipeline, DescriptorSet,
     GpuContext, Image, ImageDesc, ImageUsage, ImageUse, Layout, Recorder, Resource,
@@ -24,6 +24,17 @@ pub struct GpuPrefilter {
     downsample: ComputePipeline,
     blur_layer: ComputePipeline,
     irradiance: ComputePipeline,
+}
+
+/// GPU time of each step of the last run, from timestamp queries (seconds).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PrefilterTimings {
+    pub equirect_to_cube: f64,
+    pub mip_chain: f64,
+    /// One entry per blurred layer k = 1..K.
+    pub layers: Vec<f64>,
+    pub irradiance: f64,
+    pub copy_to_images: f64,
 }
 
 /// The prefiltered environment on the device: cube images ready to sample, plus the buffers they
@@ -53,14 +64,14 @@ impl GpuPrefilter {
                     "equirect_to_cube_f64.comp",
                     EQUIRECT_TO_CUBE_F64_COMP,
                     &IO_BINDINGS,
-                    24,
+                    28,
                 )?
             } else {
                 gpu.create_compute_pipeline(
                     "equirect_to_cube.comp",
                     EQUIRECT_TO_CUBE_COMP,
                     &IO_BINDINGS,
-                    24,
+                    28,
                 )?
             },
             downsample: gpu.create_compute_pipeline(
@@ -93,6 +104,19 @@ impl GpuPrefilter {
         intensity: f64,
         rotation_deg: f64,
     ) -> Result<GpuEnvironment> {
+        self.run_timed(gpu, source, params, intensity, rotation_deg)
+            .map(|(env, _)| env)
+    }
+
+    /// [`run`](Self::run), also returning the GPU time of each step.
+    pub fn run_timed(
+        &self,
+        gpu: &GpuContext,
+        source: &Equirect,
+        params: &PrefilterParams,
+        intensity: f64,
+        rotation_deg: f64,
+    ) -> Result<(GpuEnvironment, PrefilterTimings)> {
         params.validate()?;
         check_source(source, intensity, rotation_deg)?;
         let plan = params.plan();
@@ -168,7 +192,16 @@ impl GpuPrefilter {
             gpu.create_image(ImageDesc::cube("irradiance", irr_face).usage(sampled))?;
 
         let (rot_sin, rot_cos) = rotation_deg.to_radians().sin_cos();
+        // Timestamps: start, after step 1, after the mips, after each layer, after irradiance, end.
+        let stamps = gpu.create_timestamp_pool(layer_buffers.len() as u32 + 5)?;
+        let mut stamp = 0u32;
         gpu.submit_and_wait(|rec| {
+            rec.reset_timestamps(&stamps);
+            let mut mark = |rec: &mut Recorder<'_>| {
+                rec.timestamp(&stamps, stamp);
+                stamp += 1;
+            };
+            mark(rec);
             // 1. equirect → cube
             rec.bind_compute(&self.equirect_to_cube, &to_cube_set);
             rec.push_constants(
@@ -180,10 +213,12 @@ impl GpuPrefilter {
                     (intensity as f32).to_bits(),
                     (rot_cos as f32).to_bits(),
                     (rot_sin as f32).to_bits(),
+                    equirect_supersample(source.width, params.face_size),
                 ]),
             );
             rec.dispatch(groups(params.face_size), groups(params.face_size), 6);
             rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
+            mark(rec);
             // 2. mip chain, each level from the previous one
             for (level, down_set) in down_sets.iter().enumerate() {
                 let face = mip_faces[level + 1];
@@ -192,6 +227,7 @@ impl GpuPrefilter {
                 rec.dispatch(groups(face), groups(face), 6);
                 rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
             }
+            mark(rec);
             // 3. blurred layers and 4. irradiance: independent of each other
             for ((layer, (face, _)), blur_set) in
                 plan.iter().skip(1).zip(&layer_buffers).zip(&blur_sets)
@@ -206,10 +242,12 @@ impl GpuPrefilter {
                     ]),
                 );
                 rec.dispatch(groups(*face), groups(*face), 6);
+                mark(rec);
             }
             rec.bind_compute(&self.irradiance, &irr_set);
             rec.push_constants(&self.irradiance, bytemuck::bytes_of(&irr_face));
             rec.dispatch(groups(irr_face), groups(irr_face), 6);
+            mark(rec);
             rec.memory_barrier(Access::ComputeShaderWrite, Access::TransferRead);
             // 5. buffers → sampled cube images
             copy_to_image(rec, &mips[0], &layers[0]);
@@ -217,21 +255,33 @@ impl GpuPrefilter {
                 copy_to_image(rec, buf, image);
             }
             copy_to_image(rec, &irradiance_buf, &irradiance);
+            mark(rec);
             Ok(())
         })?;
+        let t = stamps.read_ns(stamps.capacity())?;
+        let span = |a: usize, b: usize| (t[b] - t[a]).max(0.0) * 1e-9;
+        let blurred = layer_buffers.len();
+        let timings = PrefilterTimings {
+            equirect_to_cube: span(0, 1),
+            mip_chain: span(1, 2),
+            layers: (0..blurred).map(|k| span(2 + k, 3 + k)).collect(),
+            irradiance: span(2 + blurred, 3 + blurred),
+            copy_to_images: span(3 + blurred, 4 + blurred),
+        };
 
         // Layer 0's buffer is the base mip; keep it for read-back.
         let mut mips = mips;
         let base = mips.swap_remove(0);
         let mut all_layers = vec![(params.face_size, base)];
         all_layers.extend(layer_buffers);
-        Ok(GpuEnvironment {
+        let env = GpuEnvironment {
             betas: plan.iter().map(|l| l.beta).collect(),
             layers,
             irradiance,
             layer_buffers: all_layers,
             irradiance_buffer: (irr_face, irradiance_buf),
-        })
+        };
+        Ok((env, timings))
     }
 }
 

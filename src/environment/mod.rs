@@ -4,7 +4,7 @@
 //!  load (Radiance .hdr | OpenEXR | builtin:studio) ──► equirect (linear RGB f32)
 //!     │  GPU compute (gpu.rs)            │  CPU oracle (oracle.rs), same algorithm, same params
 //!     ▼                                  ▼
-//!  1. equirect → cube (face N, bilinear, × intensity, rotated about +Y)
+//!  1. equirect → cube (face N, 4×4 sub-samples per texel, × intensity, rotated about +Y)
 //!  2. cube → mip chain (2×2, solid-angle weighted)
 //!  3. layer k: brute-force lobe convolution w = exp((c−1)/β_k²) of the mip of the layer's size
 //!  4. irradiance: cosine convolution of the 32² mip

@@ -89,9 +89,15 @@ fn validate_source(source: &Equirect) -> Result<()> {
     Ok(())
 }
 
-/// Step 1: texel (f, i, j) looks along its centre direction, turned into the environment's frame,
-/// and reads the equirect bilinearly at (u·W − ½, v·H − ½) — columns wrap around, rows clamp at
-/// the poles — times `intensity`.
+/// Sub-samples per texel side in step 1: the GPU's `SUPERSAMPLE` in
+/// `shaders/common/equirect_to_cube_body.glsl` (change both together).
+
+/// Step 1: texel (f, i, j) is the mean of S × S sub-samples (S = [`equirect_supersample`](super::params::equirect_supersample)) at face
+/// coordinates sc = 2(i + (a + ½)/S)/N − 1, tc = 2(j + (b + ½)/S)/N − 1; each looks along
+/// normalize(face_direction(f, sc, tc)), turned into the environment's frame, and reads the source
+/// pixel that contains its (u, v): column ⌊u·W⌋ wrapping around, row ⌊v·H⌋ clamped at the poles.
+/// Times `intensity`. A box filter over the texel, so that a source finer than the cube is
+/// averaged rather than point-sampled.
 pub fn equirect_to_cube(
     source: &Equirect,
     face_size: u32,
@@ -100,39 +106,38 @@ pub fn equirect_to_cube(
 ) -> CubeImage {
     let mut cube = CubeImage::new(face_size);
     let m = face_size as usize;
+    let s = super::params::equirect_supersample(source.width, face_size);
+    let coordinate = |texel: u32, sub: u32| {
+        2.0 * (f64::from(texel) + (f64::from(sub) + 0.5) / f64::from(s)) / f64::from(face_size)
+            - 1.0
+    };
     cube.texels
         .par_iter_mut()
         .enumerate()
         .for_each(|(index, texel)| {
             let (face, i, j) = texel_of_index(index, m);
-            let world = texel_direction(face, i, j, face_size);
-            let rgb = sample_bilinear(source, world_to_environment(world, rotation_deg));
-            *texel = rgba(rgb.map(|c| c * intensity));
+            let mut sum = [0.0; 3];
+            for b in 0..s {
+                for a in 0..s {
+                    let world =
+                        face_direction(face, coordinate(i, a), coordinate(j, b)).normalize();
+                    let rgb = source_pixel(source, world_to_environment(world, rotation_deg));
+                    add_weighted(&mut sum, 1.0, rgb);
+                }
+            }
+            let scale = intensity / f64::from(s * s);
+            *texel = rgba(sum.map(|c| c * scale));
         });
     cube
 }
 
-/// Bilinear read of the equirect at direction `d` (environment frame), as step 1 defines it.
-pub fn sample_bilinear(source: &Equirect, d: DVec3) -> [f64; 3] {
+/// The source pixel that contains direction `d` (environment frame), as step 1 reads it.
+pub fn source_pixel(source: &Equirect, d: DVec3) -> [f64; 3] {
     let (u, v) = direction_to_equirect(d);
     let (w, h) = (i64::from(source.width), i64::from(source.height));
-    let px = u * w as f64 - 0.5;
-    let py = v * h as f64 - 0.5;
-    let (x0, y0) = (px.floor(), py.floor());
-    let (fx, fy) = (px - x0, py - y0);
-    let column = |x: i64| x.rem_euclid(w) as u32;
-    let row = |y: i64| y.clamp(0, h - 1) as u32;
-    let (x0, y0) = (x0 as i64, y0 as i64);
-    let mut rgb = [0.0; 3];
-    for (y, wy) in [(y0, 1.0 - fy), (y0 + 1, fy)] {
-        for (x, wx) in [(x0, 1.0 - fx), (x0 + 1, fx)] {
-            let p = source.get(column(x), row(y));
-            for c in 0..3 {
-                rgb[c] += wx * wy * f64::from(p[c]);
-            }
-        }
-    }
-    rgb
+    let x = ((u * w as f64).floor() as i64).rem_euclid(w) as u32;
+    let y = ((v * h as f64).floor() as i64).clamp(0, h - 1) as u32;
+    source.get(x, y).map(f64::from)
 }
 
 /// Step 2: each parent texel is the solid-angle-weighted mean of its 2×2 children, so a mip keeps
@@ -157,9 +162,7 @@ pub fn downsample(cube: &CubeImage) -> CubeImage {
             ] {
                 let d_omega = texel_solid_angle(ci, cj, child_size);
                 let l = cube.get(face, ci, cj);
-                for c in 0..3 {
-                    sum[c] += f64::from(l[c]) * d_omega;
-                }
+                add_weighted(&mut sum, d_omega, [l[0], l[1], l[2]].map(f64::from));
                 weight += d_omega;
             }
             *texel = rgba(sum.map(|s| s / weight));
@@ -205,9 +208,7 @@ pub fn blur_layer(source: &CubeImage, beta: f64) -> CubeImage {
                         let q = (d - texels.direction[s]).length_squared() / 2.0;
                         if q <= q_max {
                             let w = (-q / (beta * beta)).exp() * texels.solid_angle[s];
-                            for c in 0..3 {
-                                sum[c] += w * texels.radiance[s][c];
-                            }
+                            add_weighted(&mut sum, w, texels.radiance[s]);
                             weight += w;
                         }
                     }
@@ -235,9 +236,7 @@ pub fn irradiance(source: &CubeImage) -> CubeImage {
             let mut weight = 0.0;
             for s in 0..texels.direction.len() {
                 let w = n.dot(texels.direction[s]).max(0.0) * texels.solid_angle[s];
-                for c in 0..3 {
-                    sum[c] += w * texels.radiance[s][c];
-                }
+                add_weighted(&mut sum, w, texels.radiance[s]);
                 weight += w;
             }
             *texel = rgba(sum.map(|s| std::f64::consts::PI * s / weight));
@@ -354,6 +353,13 @@ fn texel_of_index(index: usize, m: usize) -> (usize, u32, u32) {
     (face, i as u32, j as u32)
 }
 
+/// sum += w·rgb, channel by channel.
+fn add_weighted(sum: &mut [f64; 3], w: f64, rgb: [f64; 3]) {
+    for (s, l) in sum.iter_mut().zip(rgb) {
+        *s += w * l;
+    }
+}
+
 fn rgba(rgb: [f64; 3]) -> [f32; 4] {
     [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32, 1.0]
 }
@@ -411,31 +417,36 @@ mod tests {
     }
 
     #[test]
-    fn face_centres_read_the_equirect_bilinearly_with_wrap_and_rotation() {
-        // 8 × 4 map, pixel (x, y) = (x, y, 1). Face size 1: the texel centre is the face axis.
-        let src = Equirect {
+    fn base_texels_average_the_pixels_under_their_sub_samples() {
+        // An 8 × 4 map of 45° pixels and a cube of face 1: the 16 sub-samples of a face sit at
+        // sc, tc ∈ {±¼, ±¾}. By hand, from SPEC §4's (u, v):
+        // +Y: polar angle θ = atan(√(sc² + tc²)) is 46.7° for the four (±¾, ±¾) samples (row 1)
+        // and ≤ 38.3° for the other twelve (row 0). With L = 10·row + 1: (12·1 + 4·11)/16 = 3.5.
+        let by_row = Equirect {
             width: 8,
             height: 4,
-            pixels: (0..32)
-                .map(|p| [(p % 8) as f32, (p / 8) as f32, 1.0])
-                .collect(),
+            pixels: (0..32).map(|p| [(10 * (p / 8) + 1) as f32; 3]).collect(),
         };
-        let cube = equirect_to_cube(&src, 1, 3.0, 0.0);
-        // SPEC §4 by hand: +X is u = 0.75, v = 0.5 → px = 5.5, py = 1.5: the mean of columns 5, 6
-        // and rows 1, 2 = (5.5, 1.5), × 3. −Z is u = 0.5 → px = 3.5. +Y is v = 0 → py = −0.5:
-        // both rows clamp to 0; u = 0.5 + atan2(0, −0)/2π = 0.5 … any column pair, row 0.
-        let x = cube.get(0, 0, 0);
-        assert_eq!([x[0], x[1], x[2]], [16.5, 4.5, 3.0]);
-        let minus_z = cube.get(5, 0, 0);
-        assert_eq!([minus_z[0], minus_z[1]], [10.5, 4.5]);
-        assert_eq!(cube.get(2, 0, 0)[1], 0.0);
-        assert_eq!(cube.get(3, 0, 0)[1], 9.0, "−Y clamps to the last row (3)");
-        // Turned by 90°, +X sees the environment's +Z: u = 1 → px = 7.5, columns 7 and 0 (wrap).
-        let turned = equirect_to_cube(&src, 1, 1.0, 90.0).get(0, 0, 0);
-        assert!(
-            (turned[0] - 3.5).abs() < 1e-5 && (turned[1] - 1.5).abs() < 1e-5,
-            "{turned:?}"
-        );
+        let up = equirect_to_cube(&by_row, 1, 2.0, 0.0).get(2, 0, 0);
+        assert!((up[0] - 2.0 * 3.5).abs() < 1e-6, "{up:?}");
+        // +Z: u = ½ + atan2(x, −1)/2π is in (0.88, 0.97) for x = sc > 0 (column 7) and in
+        // (0.03, 0.11) for x < 0 (column 0, across the wrap). With L = column: (8·7 + 8·0)/16.
+        let by_column = Equirect {
+            width: 8,
+            height: 4,
+            pixels: (0..32).map(|p| [(p % 8) as f32; 3]).collect(),
+        };
+        let plus_z = equirect_to_cube(&by_column, 1, 1.0, 0.0).get(4, 0, 0);
+        assert!((plus_z[0] - 3.5).abs() < 1e-6, "{plus_z:?}");
+        // Turning the environment by 90° about +Y shows world +X what +Z showed unturned:
+        // world_to_environment maps (1, −tc, −sc) to (sc, −tc, 1), the +Z face's samples.
+        let turned = equirect_to_cube(&by_column, 1, 1.0, 90.0).get(0, 0, 0);
+        assert!((turned[0] - 3.5).abs() < 1e-6, "{turned:?}");
+        // −Z, the image centre: u = ½ − atan(sc)/2π, columns 3 (sc > 0) and 4 → 3.5 as well;
+        // +X: u = ½ + atan2(1, sc)/2π, columns 5 (sc > 0) and 6 → 5.5.
+        let minus_z = equirect_to_cube(&by_column, 1, 1.0, 0.0).get(5, 0, 0);
+        let plus_x = equirect_to_cube(&by_column, 1, 1.0, 0.0).get(0, 0, 0);
+        assert!((minus_z[0] - 3.5).abs() < 1e-6 && (plus_x[0] - 5.5).abs() < 1e-6);
     }
 
     #[test]
@@ -480,9 +491,7 @@ mod tests {
                 let q = (d - texels.direction[s]).length_squared() / 2.0;
                 if q <= q_max {
                     let w = (-q / (beta * beta)).exp() * texels.solid_angle[s];
-                    for c in 0..3 {
-                        sum[c] += w * texels.radiance[s][c];
-                    }
+                    add_weighted(&mut sum, w, texels.radiance[s]);
                     weight += w;
                 }
             }
@@ -577,6 +586,7 @@ mod tests {
                 let want = 1.0 + 0.5 * texel_direction(f, i, j, m).x * mean_cos;
                 worst = worst.max((f64::from(texel[0]) - want).abs());
             }
+            println!("langevin β {beta}: {worst:e}");
             assert!(worst < 2e-4, "β = {beta}: worst {worst:e}");
         }
     }
@@ -609,7 +619,7 @@ mod tests {
     fn invalid_inputs_are_errors() {
         let src = Equirect::constant(8, 4, [1.0; 3]);
         let good = PrefilterParams {
-            face_size: 8,
+            face_size: 16,
             layers: 2,
             beta_min: 0.5,
             beta_max: 0.5,

@@ -8,11 +8,13 @@
 //! from noisy values carry (low readings would count more). Owns the pipeline and the "too few
 //! data" checks; the maths is in [`super::separation`] and [`super::diffuse`].
 
-use super::data::Measurements;
+use super::data::{Measurement, Measurements};
 use super::diffuse::{
     check_lacquer_ratios, eval_law, fit_diffuse, DiffuseFit, DiffuseSums, Normalisation,
 };
-use super::separation::{BeckmannSearch, RowGeometry, Separation, BECKMANN_M_RANGE, FRESNEL_KNOTS};
+use super::separation::{
+    BeckmannSearch, LinearSolution, RowGeometry, Separation, BECKMANN_M_RANGE, FRESNEL_KNOTS,
+};
 use crate::model::brdf::{lacquer_brdf, view_dependent_diffuse, BrdfParams};
 use crate::model::{FresnelTable, LacquerMaterial};
 use crate::{Error, Result};
@@ -230,7 +232,7 @@ fn normalisation(reference: Option<&LacquerMaterial>) -> Result<Normalisation> {
 /// Every term needs data of its own kind; say which term lacks it.
 fn check_enough_data(
     data: &Measurements,
-    rows: &[super::data::Measurement],
+    rows: &[Measurement],
     geometry: &[RowGeometry],
 ) -> Result<()> {
     if rows.is_empty() {
@@ -299,7 +301,7 @@ fn check_enough_data(
 
 /// Per channel: 1e-3 of the median value. Weights 1/max(value, floor)² so that a zero reading
 /// (a black board's blue channel, say) does not get an infinite weight.
-fn value_floor(rows: &[super::data::Measurement]) -> [f64; 3] {
+fn value_floor(rows: &[Measurement]) -> [f64; 3] {
     std::array::from_fn(|c| {
         let mut values: Vec<f64> = rows.iter().map(|r| r.reflectance[c]).collect();
         values.sort_by(f64::total_cmp);
@@ -309,7 +311,7 @@ fn value_floor(rows: &[super::data::Measurement]) -> [f64; 3] {
 }
 
 fn search(
-    rows: &[super::data::Measurement],
+    rows: &[Measurement],
     geometry: &[RowGeometry],
     weights: &[[f64; 3]],
     sample_count: usize,
@@ -388,9 +390,9 @@ fn assemble_material(
 /// [`lacquer_brdf`], so the report checks what the renderer will draw).
 fn fitted_rows(
     selected: &[usize],
-    rows: &[super::data::Measurement],
+    rows: &[Measurement],
     geometry: &[RowGeometry],
-    solution: &super::separation::LinearSolution,
+    solution: &LinearSolution,
     material: &LacquerMaterial,
     fresnel: &FresnelTable,
     ratios: &[f64],

@@ -18,6 +18,7 @@
 //! no model maths (D, G, F and f_r come from `model::brdf`). docs/measurements.md documents the
 //! formats and the method for users.
 
+pub mod charts;
 pub mod csv;
 pub mod data;
 pub mod diffuse;

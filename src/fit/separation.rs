@@ -13,10 +13,10 @@
 //! the best diffuse and Fresnel values are one weighted linear least-squares solve, and m is found
 //! by minimising that solve's residual J(m) over a log-spaced grid, then a golden section.
 //!
-//! The curvature of the table is penalised very lightly (10⁻⁶ of the data's weight) so that knots
-//! no row reaches (between measured angles, beyond the last) are filled smoothly; where the data
-//! reach no knot near 90°, F(90°) = 1 is added as a constraint (every Fresnel curve reaches 1 at
-//! grazing incidence). Owns the linear model and the m search; the per-board laws f and g are in
+//! The curvature of the table is penalised very lightly (10⁻⁸ of the data's mean weight per
+//! knot, so measured knots do not move) so that knots no row reaches (between measured angles,
+//! beyond the last) are filled smoothly; where the data reach no knot near 90°, F(90°) = 1 is
+//! added as a constraint (every Fresnel curve reaches 1 at grazing incidence). Owns the linear model and the m search; the per-board laws f and g are in
 //! [`super::diffuse`].
 
 use glam::DVec3;

@@ -8,6 +8,7 @@ use super::buffer::Buffer;
 use super::conv::{self, Access, Layout};
 use super::image::Image;
 use super::pipeline::{ComputePipeline, DescriptorSet, GraphicsPipeline};
+use super::query::TimestampPool;
 use ash::vk;
 
 /// A use of an image: the access and the layout it must be in.
@@ -39,6 +40,31 @@ pub struct Recorder<'a> {
 }
 
 impl Recorder<'_> {
+    /// Resets every query of `pool`; record before the first `timestamp` of a submit.
+    pub fn reset_timestamps(&mut self, pool: &TimestampPool) {
+        // SAFETY: recording; the pool is live and not in use by pending work.
+        unsafe {
+            self.device
+                .cmd_reset_query_pool(self.cmd, pool.raw, 0, pool.capacity())
+        };
+    }
+
+    /// Writes timestamp `index` once all previously recorded work has completed.
+    pub fn timestamp(&mut self, pool: &TimestampPool, index: u32) {
+        if index >= pool.capacity() {
+            return;
+        }
+        // SAFETY: recording; index is within the pool, reset earlier in this command buffer.
+        unsafe {
+            self.device.cmd_write_timestamp2(
+                self.cmd,
+                vk::PipelineStageFlags2::ALL_COMMANDS,
+                pool.raw,
+                index,
+            )
+        };
+    }
+
     /// A global memory barrier: everything written with `from` is visible to `to`.
     pub fn memory_barrier(&mut self, from: Access, to: Access) {
         let (src_stage, src_access) = conv::stage_access(from);

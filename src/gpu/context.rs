@@ -11,6 +11,7 @@ use super::pipeline::{
     Binding, ComputePipeline, DescriptorSet, GraphicsPipeline, GraphicsPipelineDesc,
     PipelineLayout, Resource,
 };
+use super::query::TimestampPool;
 use ash::vk;
 use std::sync::{Arc, Mutex};
 
@@ -102,6 +103,10 @@ impl GpuContext {
 
     pub fn create_image(&self, desc: ImageDesc) -> Result<Image, GpuError> {
         Image::new(&self.shared, desc)
+    }
+
+    pub fn create_timestamp_pool(&self, capacity: u32) -> Result<TimestampPool, GpuError> {
+        TimestampPool::new(&self.shared, capacity)
     }
 
     pub fn create_sampler(&self) -> Result<Sampler, GpuError> {

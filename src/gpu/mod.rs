@@ -34,6 +34,7 @@ mod error;
 mod image;
 mod instance;
 mod pipeline;
+mod query;
 pub mod shaders;
 
 pub use adapter::AdapterInfo;
@@ -47,3 +48,4 @@ pub use pipeline::{
     Binding, BindingKind, ComputePipeline, DescriptorSet, GraphicsPipeline, GraphicsPipelineDesc,
     PipelineLayout, Resource, VertexAttribute,
 };
+pub use query::TimestampPool;

@@ -543,6 +543,23 @@ mod tests {
     }
 
     #[test]
+    fn embedded_table_keeps_the_documents_line_numbers() {
+        // A scene file's [material] table: spans point into the whole document.
+        let text = "[camera]\nfov_deg = 40\n\n[material]\npreset = \"rough\"\nm = 2\n";
+        let document = DeTable::parse(text).unwrap();
+        let material = document.get_ref().get("material").unwrap();
+        let table = material.get_ref().as_table().unwrap();
+        let err = material_from_de_table(table, text, Path::new("."), "scene.toml").unwrap_err();
+        match err {
+            Error::Parse { line, message, .. } => {
+                assert_eq!(line, 6);
+                assert!(message.starts_with("column 5: invalid m = 2"), "{message}");
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
     fn plain_tables_work_without_spans() {
         let table: toml::Table = toml::from_str("preset = \"rough\"\nc0 = 1.1\n").unwrap();
         let m = material_from_toml_table(&table, Path::new("."), "scene.toml").unwrap();

@@ -10,9 +10,9 @@ use crate::environment::gpu::{GpuEnvironment, GpuPrefilter};
 use crate::environment::params::ViewBlur;
 use crate::environment::{Equirect, PrefilterParams};
 use crate::gpu::{
-    Access, Binding, BindingKind, BufferDesc, BufferUsage, Format, GpuContext, GraphicsPipeline,
-    GraphicsPipelineDesc, Image, ImageDesc, ImageUse, Layout, RenderTargets, Resource, Sampler,
-    VertexAttribute,
+    Access, Binding, BindingKind, Buffer, BufferDesc, BufferUsage, DescriptorSet, Format,
+    GpuContext, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageUse, Layout,
+    RenderTargets, Resource, Sampler, VertexAttribute,
 };
 use crate::model::{BrdfParams, FresnelTable};
 use crate::output::HdrImage;
@@ -57,16 +57,22 @@ pub enum Background {
     Environment,
 }
 
-/// What one draw shows.
-pub struct DrawScene<'a> {
+/// One lacquered object: a mesh in world space and its material.
+#[derive(Clone, Copy)]
+pub struct DrawObject<'a> {
     pub mesh: &'a Mesh,
-    pub camera: &'a Camera,
-    pub lights: &'a [Light],
     pub brdf: &'a BrdfParams,
     pub fresnel: &'a FresnelTable,
-    /// The prefiltered environment lighting the mesh, if any.
-    pub environment: Option<&'a GpuEnvironment>,
     pub view_blur: ViewBlur,
+}
+
+/// What one draw shows.
+pub struct DrawScene<'a> {
+    pub objects: &'a [DrawObject<'a>],
+    pub camera: &'a Camera,
+    pub lights: &'a [Light],
+    /// The prefiltered environment lighting the objects, if any.
+    pub environment: Option<&'a GpuEnvironment>,
     pub background: Background,
 }
 
@@ -162,7 +168,7 @@ impl LacquerRenderer {
         if self.black_environment.is_none() {
             let black = Equirect::constant(2, 1, [0.0; 3]);
             let params = PrefilterParams {
-                face_size: 8,
+                face_size: crate::environment::params::MIN_LAYER_FACE,
                 layers: 2,
                 beta_min: 1.0,
                 beta_max: 1.0,
@@ -192,6 +198,17 @@ impl LacquerRenderer {
     }
 }
 
+/// The GPU resources of one object for one draw.
+struct ObjectResources {
+    vertices: Buffer,
+    indices: Buffer,
+    index_count: u32,
+    lacquer_set: DescriptorSet,
+    // Bound through `lacquer_set`; kept alive until the submit has finished.
+    _frame: Buffer,
+    _knots: Buffer,
+}
+
 fn draw(
     gpu: &GpuContext,
     pipelines: &Pipelines,
@@ -205,55 +222,6 @@ fn draw(
         height,
         samples,
     } = *settings;
-    let vertices: Vec<[f32; 6]> = scene
-        .mesh
-        .positions
-        .iter()
-        .zip(&scene.mesh.normals)
-        .map(|(p, n)| [p[0], p[1], p[2], n[0], n[1], n[2]])
-        .collect();
-    let mut vertex_buf = gpu.create_buffer(BufferDesc::upload(
-        "mesh vertices",
-        (vertices.len() * VERTEX_STRIDE as usize) as u64,
-        BufferUsage::VERTEX,
-    ))?;
-    vertex_buf.write(&vertices)?;
-    let mut index_buf = gpu.create_buffer(BufferDesc::upload(
-        "mesh indices",
-        (scene.mesh.indices.len() * 4) as u64,
-        BufferUsage::INDEX,
-    ))?;
-    index_buf.write(&scene.mesh.indices)?;
-
-    let env_uniforms = EnvironmentUniforms {
-        enabled: scene.environment.is_some(),
-        layer_betas: environment.betas.clone(),
-        view_blur: scene.view_blur,
-    };
-    let frame = FrameUniforms::new(
-        scene.camera,
-        width,
-        height,
-        scene.mesh.bounding_radius(),
-        scene.lights,
-        scene.brdf,
-        scene.fresnel,
-        &env_uniforms,
-    );
-    let mut frame_buf = gpu.create_buffer(BufferDesc::upload(
-        "frame uniforms",
-        std::mem::size_of::<FrameUniforms>() as u64,
-        BufferUsage::UNIFORM,
-    ))?;
-    frame_buf.write(std::slice::from_ref(&frame))?;
-    let knots = shading::fresnel_knots(scene.fresnel);
-    let mut knots_buf = gpu.create_buffer(BufferDesc::upload(
-        "fresnel knots",
-        (knots.len() * 16) as u64,
-        BufferUsage::STORAGE,
-    ))?;
-    knots_buf.write(&knots)?;
-
     // Unused array slots repeat the last layer: every element needs a valid descriptor.
     let mut layer_images: Vec<&Image> = environment.layers.iter().collect();
     while layer_images.len() < MAX_ENV_LAYERS {
@@ -261,16 +229,104 @@ fn draw(
         layer_images.push(last);
     }
     layer_images.truncate(MAX_ENV_LAYERS);
-    let resources = || {
-        vec![
-            (0, Resource::Buffer(&frame_buf)),
-            (1, Resource::Buffer(&knots_buf)),
-            (2, Resource::SampledImages(layer_images.clone(), sampler)),
-            (3, Resource::SampledImage(&environment.irradiance, sampler)),
-        ]
+    let scene_radius = scene
+        .objects
+        .iter()
+        .map(|o| o.mesh.bounding_radius())
+        .fold(0.0, f64::max);
+    let uniforms = |object: &DrawObject<'_>| {
+        FrameUniforms::new(
+            scene.camera,
+            width,
+            height,
+            scene_radius,
+            scene.lights,
+            object.brdf,
+            object.fresnel,
+            &EnvironmentUniforms {
+                enabled: scene.environment.is_some(),
+                layer_betas: environment.betas.clone(),
+                view_blur: object.view_blur,
+            },
+        )
     };
-    let lacquer_set = gpu.create_descriptor_set(pipelines.lacquer.layout(), &resources())?;
-    let background_set = gpu.create_descriptor_set(pipelines.background.layout(), &resources())?;
+    let bind = |layout, frame: &Buffer, knots: &Buffer| {
+        gpu.create_descriptor_set(
+            layout,
+            &[
+                (0, Resource::Buffer(frame)),
+                (1, Resource::Buffer(knots)),
+                (2, Resource::SampledImages(layer_images.clone(), sampler)),
+                (3, Resource::SampledImage(&environment.irradiance, sampler)),
+            ],
+        )
+    };
+
+    let mut objects = Vec::with_capacity(scene.objects.len());
+    for object in scene.objects {
+        let vertices: Vec<[f32; 6]> = object
+            .mesh
+            .positions
+            .iter()
+            .zip(&object.mesh.normals)
+            .map(|(p, n)| [p[0], p[1], p[2], n[0], n[1], n[2]])
+            .collect();
+        let vertices = upload(gpu, "mesh vertices", &vertices, BufferUsage::VERTEX)?;
+        let indices = upload(
+            gpu,
+            "mesh indices",
+            &object.mesh.indices,
+            BufferUsage::INDEX,
+        )?;
+        let frame = upload(
+            gpu,
+            "frame uniforms",
+            std::slice::from_ref(&uniforms(object)),
+            BufferUsage::UNIFORM,
+        )?;
+        let knots = shading::fresnel_knots(object.fresnel);
+        let knots = upload(gpu, "fresnel knots", &knots, BufferUsage::STORAGE)?;
+        let lacquer_set = bind(pipelines.lacquer.layout(), &frame, &knots)?;
+        objects.push(ObjectResources {
+            vertices,
+            indices,
+            index_count: object.mesh.indices.len() as u32,
+            lacquer_set,
+            _frame: frame,
+            _knots: knots,
+        });
+    }
+    // The background pass needs only the camera and the environment: the uniforms of any
+    // material will do (a default one when the scene has no object).
+    let default_brdf = crate::model::LacquerMaterial::default().brdf_params()?;
+    let default_fresnel =
+        crate::model::FresnelTable::new(vec![0.0, 90.0], vec![[0.0; 3], [1.0; 3]])?;
+    let background_object = DrawObject {
+        mesh: scene.objects.first().map_or(&EMPTY_MESH, |o| o.mesh),
+        brdf: scene.objects.first().map_or(&default_brdf, |o| o.brdf),
+        fresnel: scene
+            .objects
+            .first()
+            .map_or(&default_fresnel, |o| o.fresnel),
+        view_blur: ViewBlur::default(),
+    };
+    let background_frame = upload(
+        gpu,
+        "background uniforms",
+        std::slice::from_ref(&uniforms(&background_object)),
+        BufferUsage::UNIFORM,
+    )?;
+    let background_knots = upload(
+        gpu,
+        "background knots",
+        &shading::fresnel_knots(background_object.fresnel),
+        BufferUsage::STORAGE,
+    )?;
+    let background_set = bind(
+        pipelines.background.layout(),
+        &background_frame,
+        &background_knots,
+    )?;
 
     let color = gpu.create_image(ImageDesc::color_target("color", width, height, samples))?;
     let resolve = if samples > 1 {
@@ -290,7 +346,6 @@ fn draw(
     let color_attachment = ImageUse::new(Access::ColorAttachmentWrite, Layout::ColorAttachment);
     let depth_attachment = ImageUse::new(Access::DepthAttachmentWrite, Layout::DepthAttachment);
     let transfer_src = ImageUse::new(Access::TransferRead, Layout::TransferSrc);
-    let index_count = scene.mesh.indices.len() as u32;
     gpu.submit_and_wait(|rec| {
         rec.image_barrier(&color, undefined, color_attachment);
         if let Some(resolve) = &resolve {
@@ -307,9 +362,11 @@ fn draw(
             rec.bind_graphics(&pipelines.background, &background_set);
             rec.draw(3);
         }
-        rec.bind_graphics(&pipelines.lacquer, &lacquer_set);
-        rec.bind_mesh_buffers(&vertex_buf, &index_buf);
-        rec.draw_indexed(index_count);
+        for object in &objects {
+            rec.bind_graphics(&pipelines.lacquer, &object.lacquer_set);
+            rec.bind_mesh_buffers(&object.vertices, &object.indices);
+            rec.draw_indexed(object.index_count);
+        }
         rec.end_rendering();
         rec.image_barrier(output, color_attachment, transfer_src);
         rec.copy_image_to_buffer(output, &readback);
@@ -323,6 +380,28 @@ fn draw(
         pixels,
     })
 }
+
+/// A mapped buffer holding `data`.
+fn upload<T: bytemuck::Pod>(
+    gpu: &GpuContext,
+    name: &str,
+    data: &[T],
+    usage: BufferUsage,
+) -> Result<Buffer> {
+    let mut buffer = gpu.create_buffer(BufferDesc::upload(
+        name,
+        std::mem::size_of_val(data) as u64,
+        usage,
+    ))?;
+    buffer.write(data)?;
+    Ok(buffer)
+}
+
+static EMPTY_MESH: Mesh = Mesh {
+    positions: Vec::new(),
+    normals: Vec::new(),
+    indices: Vec::new(),
+};
 
 fn validate(gpu: &GpuContext, scene: &DrawScene<'_>, settings: &RenderSettings) -> Result<()> {
     let max = gpu.info().max_image_dimension_2d;
@@ -362,5 +441,8 @@ fn validate(gpu: &GpuContext, scene: &DrawScene<'_>, settings: &RenderSettings) 
     for light in scene.lights {
         light.validate()?;
     }
-    scene.mesh.validate()
+    for object in scene.objects {
+        object.mesh.validate()?;
+    }
+    Ok(())
 }

@@ -107,8 +107,9 @@ const AXIS_EPSILON: f64 = 1e-9;
 
 /// Dense samples per piece for measuring length and turning.
 const COST_SAMPLES: usize = 512;
-/// Sampling cost: one segment per 1 mm of length plus one per 4° of turning, so flat walls get
-/// evenly spaced rings and the tight rim gets enough of them for a round silhouette.
+/// Sampling cost: 1 mm of length weighs as much as 4° of turning, and the segment budget is spread
+/// evenly over the cost, so flat walls get evenly spaced rings and the tight rim enough of them
+/// for a round silhouette.
 const COST_LENGTH_CM: f64 = 0.1;
 const COST_TURN_RAD: f64 = 4.0 * PI / 180.0;
 
@@ -262,8 +263,9 @@ fn add_band(mesh: &mut Mesh, upper: Ring, lower: Ring, around: u32) {
     }
 }
 
-/// A rounded rim: the arc of radius `lip` whose top is at (`radius`-ish, `height`), tangent to
-/// walls leaving it in direction ±(sin flare, cos flare). Returns (arc, inner end, outer end).
+/// A rounded rim: the arc of radius `lip` reaching out to r = `outer_radius` and up to
+/// y = `height`, tangent at both ends to walls running along ±(sin flare, cos flare).
+/// Returns (arc from the inner wall over the top to the outer wall, inner end, outer end).
 fn rim(outer_radius: f64, height: f64, lip: f64, flare: f64) -> (Piece, DVec2, DVec2) {
     let centre = DVec2::new(outer_radius - lip, height - lip);
     let inner_angle = PI - flare;

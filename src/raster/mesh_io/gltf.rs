@@ -73,6 +73,7 @@ pub(super) fn load(path: &Path) -> Result<(Mesh, LoadReport)> {
             builder.add(part)?;
         }
     }
+    skipped_modes.sort();
     skipped_modes.dedup();
     if !skipped_modes.is_empty() {
         builder.report.skipped.push(format!(

@@ -303,3 +303,95 @@ fn to_f64(p: [f32; 3]) -> DVec3 {
 fn to_f32(v: DVec3) -> [f32; 3] {
     [v.x as f32, v.y as f32, v.z as f32]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn triangle() -> Mesh {
+        let s = 0.5f32.sqrt();
+        Mesh {
+            positions: vec![[0.0, 0.0, 0.0], [1.0, -1.0, 0.0], [0.0, 0.0, 1.0]],
+            // In the plane x + y = 0; the winding's (b−a)×(c−a) = (1,−1,0)×(0,0,1) = (−1,−1,0),
+            // so the normals are that side's (−1,−1,0)/√2.
+            normals: vec![[-s, -s, 0.0]; 3],
+            indices: vec![0, 1, 2],
+        }
+    }
+
+    fn face_normal_of(mesh: &Mesh) -> DVec3 {
+        let [a, b, c] = [0, 1, 2].map(|k| to_f64(mesh.positions[mesh.indices[k] as usize]));
+        (b - a).cross(c - a).normalize()
+    }
+
+    #[test]
+    fn non_uniform_scale_moves_normals_by_the_inverse_transpose() {
+        // S = diag(2, 1, 1), then translate by (0, 0, 3). The plane x + y = 0 becomes x/2 + y = 0,
+        // normal ∝ (1/2, 1, 0) = (1, 2, 0)/√5 (for the −(1,1,0) side: −(1, 2, 0)/√5).
+        let matrix = DMat4::from_translation(DVec3::new(0.0, 0.0, 3.0))
+            * DMat4::from_scale(DVec3::new(2.0, 1.0, 1.0));
+        let moved = transform_mesh(&triangle(), matrix);
+        assert_eq!(
+            moved.positions,
+            vec![[0.0, 0.0, 3.0], [2.0, -1.0, 3.0], [0.0, 0.0, 4.0]]
+        );
+        let expected = -DVec3::new(1.0, 2.0, 0.0) / 5f64.sqrt();
+        for n in &moved.normals {
+            // 1e-7: f32 output rounding of a unit vector.
+            assert!((to_f64(*n) - expected).length() < 1e-7, "{n:?}");
+        }
+        // The winding still agrees with the normals (the transformed face normal is exact here).
+        assert!((face_normal_of(&moved) - expected).length() < 1e-7);
+        assert_eq!(moved.indices, vec![0, 1, 2]);
+    }
+
+    #[test]
+    fn mirroring_reverses_the_winding_and_reflects_the_normals() {
+        let mirror = DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0));
+        let mesh = triangle();
+        let moved = transform_mesh(&mesh, mirror);
+        assert_eq!(moved.indices, vec![0, 2, 1]);
+        // diag(−1,1,1)⁻ᵀ·(−s,−s,0) = (s,−s,0), and the reversed triangle faces the same way.
+        let s = 0.5f64.sqrt();
+        let expected = DVec3::new(s, -s, 0.0);
+        assert!(moved
+            .normals
+            .iter()
+            .all(|n| (to_f64(*n) - expected).length() < 1e-7));
+        assert!((face_normal_of(&moved) - expected).length() < 1e-7);
+        // And the original's winding agrees with its normals (the premise of this test).
+        assert!((face_normal_of(&mesh) - to_f64(mesh.normals[0])).length() < 1e-7);
+    }
+
+    #[test]
+    fn rotation_turns_normals_with_the_geometry() {
+        // R_x(90°): (x, y, z) ↦ (x, −z, y); a +z normal becomes −y.
+        let rotation = DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2);
+        let mesh = Mesh {
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            normals: vec![[0.0, 0.0, 1.0]; 3],
+            indices: vec![0, 1, 2],
+        };
+        let moved = transform_mesh(&mesh, rotation);
+        for n in &moved.normals {
+            assert!(
+                (to_f64(*n) - DVec3::new(0.0, -1.0, 0.0)).length() < 1e-7,
+                "{n:?}"
+            );
+        }
+        assert!((to_f64(moved.positions[2]) - DVec3::new(0.0, 0.0, 1.0)).length() < 1e-7);
+    }
+
+    #[test]
+    fn report_notes_list_what_changed_and_nothing_otherwise() {
+        assert!(LoadReport::default().notes().is_empty());
+        let report = LoadReport {
+            degenerate_triangles_dropped: 2,
+            generated_normals: 5,
+            skipped: vec!["skipped 1 point/line element(s)".into()],
+        };
+        let notes = report.notes();
+        assert_eq!(notes.len(), 3);
+        assert!(notes[1].contains("2 degenerate") && notes[2].contains("5 vertex"));
+    }
+}

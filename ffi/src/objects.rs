@@ -1,0 +1,223 @@
+//! Environment and mesh handles: made from files or caller arrays, immutable afterwards.
+//! The environment stays on the CPU here; each renderer prefilters it on first use
+//! (`renderer.rs`), since GPU images belong to one device.
+
+use std::ffi::c_char;
+use std::path::Path;
+use std::sync::Arc;
+
+use shikki::environment::{load_environment, Equirect};
+use shikki::raster::mesh_io::{angle_weighted_normals, load_mesh};
+use shikki::raster::{BuiltinMesh, Mesh};
+
+use crate::boundary::{c_str, check_out, ffi_boundary, slice, write_out, FfiError};
+use crate::handles::{self, ShikkiEnvironment, ShikkiMesh};
+use crate::status::ShikkiStatus;
+
+/// An environment handle's object: the radiance map, shared with the scenes that use it.
+pub type EnvironmentObject = Arc<Equirect>;
+/// A mesh handle's object, shared with the scenes that use it.
+pub type MeshObject = Arc<Mesh>;
+
+/// Loads an equirectangular radiance map (`.hdr` or `.exr`, or `builtin:studio`).
+///
+/// # Safety
+/// `path` is a NUL-terminated UTF-8 string; `out` is valid for one write.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_environment_load(
+    path: *const c_char,
+    out: *mut ShikkiEnvironment,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        check_out(out, "out")?;
+        // SAFETY: the caller's contract above.
+        let path = unsafe { c_str(path, "path") }?;
+        let loaded = load_environment(path)?;
+        let handle = handles::insert::<ShikkiEnvironment, _>(Arc::new(loaded.image));
+        // SAFETY: checked non-NULL; valid for one write by contract.
+        unsafe { write_out(out, "out", handle) }
+    })
+}
+
+/// Makes an environment from linear RGB radiance, `width × height` pixels, row 0 at the top
+/// (+Y), 3 floats per pixel (SPEC §4 mapping). The data is copied.
+///
+/// # Safety
+/// `rgb` is valid for reads of `width * height * 3` floats; `out` is valid for one write.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_environment_create_rgb(
+    width: u32,
+    height: u32,
+    rgb: *const f32,
+    out: *mut ShikkiEnvironment,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        check_out(out, "out")?;
+        if width == 0 || height == 0 {
+            return Err(FfiError::invalid(format!(
+                "environment size {width}×{height}: both sides must be at least 1 pixel"
+            )));
+        }
+        let count = (width as usize)
+            .checked_mul(height as usize)
+            .and_then(|n| n.checked_mul(3))
+            .ok_or_else(|| FfiError::invalid("environment size overflows"))?;
+        // SAFETY: the caller's contract above.
+        let data = unsafe { slice(rgb, count, "rgb") }?;
+        if let Some(i) = data.iter().position(|v| !v.is_finite() || *v < 0.0) {
+            let pixel = i / 3;
+            return Err(FfiError::invalid(format!(
+                "environment pixel ({}, {}) has radiance {}: every value must be finite and ≥ 0",
+                pixel % width as usize,
+                pixel / width as usize,
+                data[i]
+            )));
+        }
+        let pixels = data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let image = Equirect {
+            width,
+            height,
+            pixels,
+        };
+        let handle = handles::insert::<ShikkiEnvironment, _>(Arc::new(image));
+        // SAFETY: checked non-NULL; valid for one write by contract.
+        unsafe { write_out(out, "out", handle) }
+    })
+}
+
+/// Destroys an environment. Scenes that use it keep their own reference. 0 is a no-op.
+#[no_mangle]
+pub extern "C" fn shikki_environment_destroy(environment: ShikkiEnvironment) -> ShikkiStatus {
+    ffi_boundary!({ handles::remove(environment) })
+}
+
+/// Makes a mesh from caller arrays: `vertex_count` positions (xyz floats), normals (xyz floats,
+/// or NULL to generate angle-weighted smooth normals), `index_count` u32 indices (a multiple of
+/// 3, counter-clockwise seen from outside). The data is copied.
+///
+/// # Safety
+/// `positions` (and `normals` unless NULL) are valid for `vertex_count * 3` floats, `indices`
+/// for `index_count` u32; `out` is valid for one write.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_mesh_create(
+    positions: *const f32,
+    normals: *const f32,
+    vertex_count: usize,
+    indices: *const u32,
+    index_count: usize,
+    out: *mut ShikkiMesh,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        check_out(out, "out")?;
+        let floats = vertex_count
+            .checked_mul(3)
+            .ok_or_else(|| FfiError::invalid("vertex_count overflows"))?;
+        let triples = |data: &[f32]| data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        // SAFETY: the caller's contract above.
+        let positions: Vec<[f32; 3]> = triples(unsafe { slice(positions, floats, "positions") }?);
+        // SAFETY: the caller's contract above.
+        let indices = unsafe { slice(indices, index_count, "indices") }?.to_vec();
+        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= vertex_count) {
+            return Err(FfiError::invalid(format!(
+                "index {bad} is out of range: there are {vertex_count} vertices"
+            )));
+        }
+        if index_count % 3 != 0 {
+            return Err(FfiError::invalid(format!(
+                "index_count {index_count} is not a multiple of 3 (one triangle per 3 indices)"
+            )));
+        }
+        let normals = if normals.is_null() {
+            angle_weighted_normals(&positions, &indices)
+        } else {
+            // SAFETY: the caller's contract above.
+            triples(unsafe { slice(normals, floats, "normals") }?)
+        };
+        let mesh = Mesh {
+            positions,
+            normals,
+            indices,
+        };
+        mesh.validate()?;
+        let handle = handles::insert::<ShikkiMesh, _>(Arc::new(mesh));
+        // SAFETY: checked non-NULL; valid for one write by contract.
+        unsafe { write_out(out, "out", handle) }
+    })
+}
+
+/// Loads a mesh file (OBJ, glTF/GLB; missing normals are generated).
+///
+/// # Safety
+/// `path` is a NUL-terminated UTF-8 string; `out` is valid for one write.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_mesh_load(
+    path: *const c_char,
+    out: *mut ShikkiMesh,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        check_out(out, "out")?;
+        // SAFETY: the caller's contract above.
+        let path = unsafe { c_str(path, "path") }?;
+        let mesh = load_mesh(Path::new(path))?;
+        let handle = handles::insert::<ShikkiMesh, _>(Arc::new(mesh));
+        // SAFETY: checked non-NULL; valid for one write by contract.
+        unsafe { write_out(out, "out", handle) }
+    })
+}
+
+/// A built-in mesh (SPEC §5): "sphere", "board", "bowl" or "plate" (a `builtin:` prefix is
+/// accepted too).
+///
+/// # Safety
+/// `name` is a NUL-terminated UTF-8 string; `out` is valid for one write.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_mesh_create_builtin(
+    name: *const c_char,
+    out: *mut ShikkiMesh,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        check_out(out, "out")?;
+        // SAFETY: the caller's contract above.
+        let name = unsafe { c_str(name, "name") }?;
+        let spec = if name.starts_with("builtin:") {
+            name.to_string()
+        } else {
+            format!("builtin:{name}")
+        };
+        let mesh = BuiltinMesh::parse(&spec)?.mesh();
+        let handle = handles::insert::<ShikkiMesh, _>(Arc::new(mesh));
+        // SAFETY: checked non-NULL; valid for one write by contract.
+        unsafe { write_out(out, "out", handle) }
+    })
+}
+
+/// The mesh's vertex and triangle counts (either pointer may be NULL).
+///
+/// # Safety
+/// `vertex_count` and `triangle_count` are NULL or valid for one write.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_mesh_counts(
+    mesh: ShikkiMesh,
+    vertex_count: *mut usize,
+    triangle_count: *mut usize,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        let object = handles::get::<_, MeshObject>(mesh)?;
+        let mesh = handles::lock(&object)?;
+        if !vertex_count.is_null() {
+            // SAFETY: non-NULL and writable by contract.
+            unsafe { write_out(vertex_count, "vertex_count", mesh.positions.len()) }?;
+        }
+        if !triangle_count.is_null() {
+            // SAFETY: non-NULL and writable by contract.
+            unsafe { write_out(triangle_count, "triangle_count", mesh.triangle_count()) }?;
+        }
+        Ok(())
+    })
+}
+
+/// Destroys a mesh. Scenes that use it keep their own reference. 0 is a no-op.
+#[no_mangle]
+pub extern "C" fn shikki_mesh_destroy(mesh: ShikkiMesh) -> ShikkiStatus {
+    ffi_boundary!({ handles::remove(mesh) })
+}

@@ -1,0 +1,435 @@
+//! Scene handles: what one picture shows (objects with transforms and materials, lights, camera,
+//! environment, background) and how it is output (size, samples, exposure, tone curve). Built
+//! with calls here, or from scene TOML (`scene_toml.rs`). A scene holds its own references to
+//! meshes and environments and its own copy of each material, so those handles may be destroyed
+//! once added.
+
+use std::sync::Arc;
+
+use glam::{DMat4, DVec3};
+use shikki::environment::Equirect;
+use shikki::model::LacquerMaterial;
+use shikki::output::ToneCurve;
+use shikki::raster::draw::{Background, SUPPORTED_SAMPLES};
+use shikki::raster::{default_lights, Camera, Light, Mesh, MAX_LIGHTS};
+
+use crate::boundary::{array, check_out, ffi_boundary, write_out, FfiError, FfiResult};
+use crate::handles::{self, ShikkiEnvironment, ShikkiMaterial, ShikkiMesh, ShikkiScene};
+use crate::objects::{EnvironmentObject, MeshObject};
+use crate::status::ShikkiStatus;
+
+/// One object of a scene.
+#[derive(Clone)]
+pub struct ObjectState {
+    pub mesh: Arc<Mesh>,
+    pub transform: DMat4,
+    pub material: LacquerMaterial,
+}
+
+/// The environment light of a scene.
+#[derive(Clone)]
+pub struct EnvironmentState {
+    pub image: Arc<Equirect>,
+    pub intensity: f64,
+    pub rotation_deg: f64,
+}
+
+/// A scene handle's object.
+#[derive(Clone)]
+pub struct SceneState {
+    pub objects: Vec<ObjectState>,
+    pub lights: Vec<Light>,
+    pub camera: Camera,
+    pub environment: Option<EnvironmentState>,
+    pub background: Background,
+    pub width: u32,
+    pub height: u32,
+    pub samples: u32,
+    pub exposure_ev: f32,
+    pub tone_curve: ToneCurve,
+}
+
+impl Default for SceneState {
+    /// No objects, no lights, the default camera, 1024×1024 with 4 samples, ACES at 0 EV and
+    /// the environment as background (black without one): the scene-file defaults.
+    fn default() -> Self {
+        SceneState {
+            objects: Vec::new(),
+            lights: Vec::new(),
+            camera: Camera::default(),
+            environment: None,
+            background: Background::Environment,
+            width: 1024,
+            height: 1024,
+            samples: 4,
+            exposure_ev: 0.0,
+            tone_curve: ToneCurve::Aces,
+        }
+    }
+}
+
+/// Tone curves by their C number (`ShikkiToneCurve`).
+pub fn tone_curve_from_c(value: u32) -> FfiResult<ToneCurve> {
+    match value {
+        0 => Ok(ToneCurve::None),
+        1 => Ok(ToneCurve::Reinhard),
+        2 => Ok(ToneCurve::Aces),
+        _ => Err(FfiError::invalid(format!(
+            "tone_curve {value}: use SHIKKI_TONE_CURVE_NONE (0), _REINHARD (1) or _ACES (2)"
+        ))),
+    }
+}
+
+/// Runs `change` on the scene behind `scene`.
+pub fn with_scene<R>(
+    scene: ShikkiScene,
+    change: impl FnOnce(&mut SceneState) -> FfiResult<R>,
+) -> FfiResult<R> {
+    let object = handles::get::<_, SceneState>(scene)?;
+    let mut state = handles::lock(&object)?;
+    change(&mut state)
+}
+
+fn vec3(v: [f64; 3]) -> DVec3 {
+    DVec3::from_array(v)
+}
+
+/// An empty scene (see `SceneState::default`): add objects, lights, an environment.
+///
+/// # Safety
+/// `out` is valid for one write.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_scene_create(out: *mut ShikkiScene) -> ShikkiStatus {
+    ffi_boundary!({
+        check_out(out, "out")?;
+        let handle = handles::insert::<ShikkiScene, _>(SceneState::default());
+        // SAFETY: checked non-NULL; valid for one write by contract.
+        unsafe { write_out(out, "out", handle) }
+    })
+}
+
+/// Destroys a scene. 0 is a no-op.
+#[no_mangle]
+pub extern "C" fn shikki_scene_destroy(scene: ShikkiScene) -> ShikkiStatus {
+    ffi_boundary!({ handles::remove(scene) })
+}
+
+/// Adds `mesh` placed by `transform` (4×4, column-major like OpenGL/glam: elements 12, 13, 14
+/// are the translation) with a copy of `material` as it is now. `transform` NULL = identity.
+///
+/// # Safety
+/// `transform` is NULL or valid for 16 doubles.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_scene_add_object(
+    scene: ShikkiScene,
+    mesh: ShikkiMesh,
+    material: ShikkiMaterial,
+    transform: *const f64,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        let transform = if transform.is_null() {
+            DMat4::IDENTITY
+        } else {
+            // SAFETY: the caller's contract above.
+            DMat4::from_cols_array(&unsafe { array::<f64, 16>(transform, "transform") }?)
+        };
+        if !transform.is_finite() {
+            return Err(FfiError::invalid(
+                "transform has a non-finite element; every element must be a finite number",
+            ));
+        }
+        if transform.row(3) != glam::DVec4::W {
+            return Err(FfiError::invalid(format!(
+                "transform's last row is {:?}: an object transform is affine, last row \
+                 (0, 0, 0, 1) (elements 3, 7, 11, 15 in column-major order)",
+                transform.row(3).to_array()
+            )));
+        }
+        let mesh = handles::read::<_, MeshObject>(mesh)?;
+        let material = handles::read::<_, LacquerMaterial>(material)?;
+        with_scene(scene, |state| {
+            state.objects.push(ObjectState {
+                mesh,
+                transform,
+                material,
+            });
+            Ok(())
+        })
+    })
+}
+
+fn add_light(scene: ShikkiScene, light: Light) -> FfiResult {
+    light.validate()?;
+    with_scene(scene, |state| {
+        if state.lights.len() >= MAX_LIGHTS {
+            return Err(FfiError::invalid(format!(
+                "the scene already has {MAX_LIGHTS} lights, the most one draw takes"
+            )));
+        }
+        state.lights.push(light);
+        Ok(())
+    })
+}
+
+/// Adds a directional light: `to_light` (towards the light; normalised here) and irradiance E
+/// (linear RGB).
+///
+/// # Safety
+/// `to_light` and `irradiance` are valid for 3 doubles each.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_scene_add_directional_light(
+    scene: ShikkiScene,
+    to_light: *const f64,
+    irradiance: *const f64,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        // SAFETY: the caller's contract above.
+        let direction = vec3(unsafe { array(to_light, "to_light") }?);
+        // SAFETY: the caller's contract above.
+        let irradiance = vec3(unsafe { array(irradiance, "irradiance") }?);
+        let to_light = direction.try_normalize().ok_or_else(|| {
+            FfiError::invalid(format!(
+                "to_light {direction}: the direction must be finite and non-zero"
+            ))
+        })?;
+        add_light(
+            scene,
+            Light::Directional {
+                to_light,
+                irradiance,
+            },
+        )
+    })
+}
+
+/// Adds a point light at `position` with intensity I per steradian (linear RGB; E = I/d²).
+///
+/// # Safety
+/// `position` and `intensity` are valid for 3 doubles each.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_scene_add_point_light(
+    scene: ShikkiScene,
+    position: *const f64,
+    intensity: *const f64,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        // SAFETY: the caller's contract above.
+        let position = vec3(unsafe { array(position, "position") }?);
+        // SAFETY: the caller's contract above.
+        let intensity = vec3(unsafe { array(intensity, "intensity") }?);
+        add_light(
+            scene,
+            Light::Point {
+                position,
+                intensity,
+            },
+        )
+    })
+}
+
+/// Adds shikki's default three-light rig (the CLI's, when no light is given).
+#[no_mangle]
+pub extern "C" fn shikki_scene_add_default_lights(scene: ShikkiScene) -> ShikkiStatus {
+    ffi_boundary!({
+        default_lights()
+            .into_iter()
+            .try_for_each(|light| add_light(scene, light))
+    })
+}
+
+/// Removes every light.
+#[no_mangle]
+pub extern "C" fn shikki_scene_clear_lights(scene: ShikkiScene) -> ShikkiStatus {
+    ffi_boundary!({
+        with_scene(scene, |state| {
+            state.lights.clear();
+            Ok(())
+        })
+    })
+}
+
+/// Sets the look-at camera; `up` NULL = +Y. `fov_deg` is the vertical field of view.
+///
+/// # Safety
+/// `eye` and `target` are valid for 3 doubles each; `up` is NULL or valid for 3.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_scene_set_camera(
+    scene: ShikkiScene,
+    eye: *const f64,
+    target: *const f64,
+    up: *const f64,
+    fov_deg: f64,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        let camera = Camera {
+            // SAFETY: the caller's contract above.
+            eye: vec3(unsafe { array(eye, "eye") }?),
+            // SAFETY: the caller's contract above.
+            target: vec3(unsafe { array(target, "target") }?),
+            up: if up.is_null() {
+                DVec3::Y
+            } else {
+                // SAFETY: the caller's contract above.
+                vec3(unsafe { array(up, "up") }?)
+            },
+            fov_deg,
+        };
+        camera.validate()?;
+        with_scene(scene, |state| {
+            state.camera = camera;
+            Ok(())
+        })
+    })
+}
+
+/// Lights the scene with `environment` × `intensity`, rotated by `rotation_deg` about +Y.
+/// Handle 0 removes the environment.
+#[no_mangle]
+pub extern "C" fn shikki_scene_set_environment(
+    scene: ShikkiScene,
+    environment: ShikkiEnvironment,
+    intensity: f64,
+    rotation_deg: f64,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        let environment = if environment.id == 0 {
+            None
+        } else {
+            if !(intensity.is_finite() && intensity >= 0.0) {
+                return Err(FfiError::invalid(format!(
+                    "environment intensity {intensity}: must be finite and ≥ 0 (1 = as stored)"
+                )));
+            }
+            if !rotation_deg.is_finite() {
+                return Err(FfiError::invalid(format!(
+                    "environment rotation {rotation_deg}°: must be a finite angle in degrees"
+                )));
+            }
+            let image = handles::read::<_, EnvironmentObject>(environment)?;
+            Some(EnvironmentState {
+                image,
+                intensity,
+                rotation_deg,
+            })
+        };
+        with_scene(scene, |state| {
+            state.environment = environment;
+            Ok(())
+        })
+    })
+}
+
+/// What fills uncovered pixels: `SHIKKI_BACKGROUND_TRANSPARENT` (alpha 0),
+/// `SHIKKI_BACKGROUND_COLOR` (opaque linear `rgb`), `SHIKKI_BACKGROUND_ENVIRONMENT` (the sharp
+/// environment; black without one). `rgb` is read only for `_COLOR`.
+///
+/// # Safety
+/// `rgb` is valid for 3 floats when `kind` is `SHIKKI_BACKGROUND_COLOR`.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_scene_set_background(
+    scene: ShikkiScene,
+    kind: u32,
+    rgb: *const f32,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        let background = match kind {
+            0 => Background::Transparent,
+            1 => {
+                // SAFETY: the caller's contract above.
+                let color: [f32; 3] = unsafe { array(rgb, "rgb") }?;
+                if color.iter().any(|c| !c.is_finite() || *c < 0.0) {
+                    return Err(FfiError::invalid(format!(
+                        "background colour {color:?}: components must be finite and ≥ 0"
+                    )));
+                }
+                Background::Color(color)
+            }
+            2 => Background::Environment,
+            _ => {
+                return Err(FfiError::invalid(format!(
+                    "background kind {kind}: use SHIKKI_BACKGROUND_TRANSPARENT (0), _COLOR (1) \
+                     or _ENVIRONMENT (2)"
+                )))
+            }
+        };
+        with_scene(scene, |state| {
+            state.background = background;
+            Ok(())
+        })
+    })
+}
+
+/// Image size and MSAA samples (1 or 4) of renders of this scene.
+#[no_mangle]
+pub extern "C" fn shikki_scene_set_output(
+    scene: ShikkiScene,
+    width: u32,
+    height: u32,
+    samples: u32,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        if width == 0 || height == 0 || width > 16384 || height > 16384 {
+            return Err(FfiError::invalid(format!(
+                "image size {width}×{height}: each side must be 1 to 16384 pixels"
+            )));
+        }
+        if !SUPPORTED_SAMPLES.contains(&samples) {
+            return Err(FfiError::invalid(format!(
+                "samples {samples}: use one of {SUPPORTED_SAMPLES:?}"
+            )));
+        }
+        with_scene(scene, |state| {
+            state.width = width;
+            state.height = height;
+            state.samples = samples;
+            Ok(())
+        })
+    })
+}
+
+/// The display transform of 8-bit and PNG output (SPEC §1): radiance × 2^exposure_ev → tone
+/// curve (`ShikkiToneCurve`) → sRGB.
+#[no_mangle]
+pub extern "C" fn shikki_scene_set_display(
+    scene: ShikkiScene,
+    exposure_ev: f32,
+    tone_curve: u32,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        if !exposure_ev.is_finite() {
+            return Err(FfiError::invalid(format!(
+                "exposure_ev {exposure_ev}: must be a finite number of stops"
+            )));
+        }
+        let tone_curve = tone_curve_from_c(tone_curve)?;
+        with_scene(scene, |state| {
+            state.exposure_ev = exposure_ev;
+            state.tone_curve = tone_curve;
+            Ok(())
+        })
+    })
+}
+
+/// The render size of the scene, so the caller can size its buffer (either pointer may be NULL).
+///
+/// # Safety
+/// `width` and `height` are NULL or valid for one write.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_scene_get_output(
+    scene: ShikkiScene,
+    width: *mut u32,
+    height: *mut u32,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        let (w, h) = with_scene(scene, |state| Ok((state.width, state.height)))?;
+        if !width.is_null() {
+            // SAFETY: non-NULL and writable by contract.
+            unsafe { write_out(width, "width", w) }?;
+        }
+        if !height.is_null() {
+            // SAFETY: non-NULL and writable by contract.
+            unsafe { write_out(height, "height", h) }?;
+        }
+        Ok(())
+    })
+}

@@ -1,0 +1,405 @@
+//! Batch rendering: a jobs file (a base scene plus sweeps) becomes one image per job.
+//!
+//! ```toml
+//! scene = "bowl.toml"                    # the base scene (or an inline [scene] table)
+//! name = "{preset}-r{r}-{orbit_deg}"     # output name template; .png/.exr added from the format
+//! [sweep]                                # the cartesian product of these lists, first key outermost
+//! "object.0.material.r" = [1, 2, 3]
+//! "camera.orbit_deg" = [0, 45, 90]
+//! ```
+//!
+//! Owns the plan (jobs, their ids, names and shards); [`run`] owns execution, [`manifest`] the CSV
+//! record and resume rule, [`sheet`] the contact sheet. Rendering itself is [`super::SceneRenderer`].
+
+pub mod manifest;
+pub mod run;
+pub mod sheet;
+
+use std::path::Path;
+
+use sha2::{Digest, Sha256};
+
+use super::doc::{self, Node, Origin, Value};
+use super::parse::{table_get, SceneDocument};
+use super::Scene;
+use crate::output::OutputFormat;
+use crate::{Error, Result};
+
+pub use run::{run_batch, BatchOptions, BatchSummary};
+
+const JOBS_KEYS: &[&str] = &["scene", "name", "sweep"];
+/// Used when the jobs file has no `name`.
+pub const DEFAULT_NAME_TEMPLATE: &str = "job-{job}";
+
+/// One swept field: its path and the values it takes.
+#[derive(Clone, Debug)]
+pub struct Sweep {
+    pub path: String,
+    pub values: Vec<Node>,
+}
+
+/// A parsed jobs file.
+#[derive(Clone, Debug)]
+pub struct BatchPlan {
+    pub base: SceneDocument,
+    pub sweeps: Vec<Sweep>,
+    pub name_template: String,
+    name_at: Origin,
+}
+
+/// One job: its id (its index in the full cartesian product, independent of sharding) and the
+/// value each sweep takes in it.
+#[derive(Clone, Debug)]
+pub struct JobSpec {
+    pub id: usize,
+    pub values: Vec<(String, Node)>,
+}
+
+/// A job ready to render.
+#[derive(Clone, Debug)]
+pub struct PreparedJob {
+    pub scene: Scene,
+    pub format: OutputFormat,
+    /// The output file name (no directory).
+    pub file_name: String,
+    /// SHA-256 of the job's full scene (every resolved value), hex.
+    pub scene_hash: String,
+}
+
+impl BatchPlan {
+    /// Reads a jobs file; the base scene's relative paths resolve against the file naming them.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let base_dir = path.parent().unwrap_or(Path::new(""));
+        Self::parse(&text, &path.display().to_string(), base_dir)
+    }
+
+    /// Parses jobs TOML (see the module doc).
+    pub fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Self> {
+        let root = doc::parse_document(text, source, base_dir)?;
+        let Value::Table(entries) = &root.value else {
+            return Err(root.at.error("a jobs file is a TOML table"));
+        };
+        if let Some(bad) = entries
+            .iter()
+            .find(|e| !JOBS_KEYS.contains(&e.key.as_str()))
+        {
+            return Err(doc::unknown_key(bad, "the jobs file", JOBS_KEYS));
+        }
+        let scene = table_get(&root, "scene").ok_or_else(|| {
+            root.at.error(
+                "a jobs file needs `scene`: the path of a scene file, or an inline [scene] table",
+            )
+        })?;
+        let base = match &scene.value {
+            Value::Str(path) => SceneDocument::load(&doc::resolve_path(&scene.at, path))
+                .map_err(|e| scene.at.error(e))?,
+            Value::Table(_) => SceneDocument {
+                root: scene.clone(),
+            },
+            _ => {
+                return Err(scene.at.error(format!(
+                    "`scene` must be a path or a table, found {}",
+                    scene.value.type_name()
+                )))
+            }
+        };
+        let (name_template, name_at) = match table_get(&root, "name") {
+            None => (DEFAULT_NAME_TEMPLATE.to_string(), root.at.clone()),
+            Some(node) => match &node.value {
+                Value::Str(s) if !s.trim().is_empty() => (s.clone(), node.at.clone()),
+                _ => return Err(node.at.error("`name` must be a non-empty string template")),
+            },
+        };
+        let mut sweeps = Vec::new();
+        if let Some(sweep) = table_get(&root, "sweep") {
+            let Value::Table(entries) = &sweep.value else {
+                return Err(sweep.at.error("[sweep] must be a table of path = [values]"));
+            };
+            for e in entries {
+                match &e.node.value {
+                    Value::Array(values) if !values.is_empty() => sweeps.push(Sweep {
+                        path: e.key.clone(),
+                        values: values.clone(),
+                    }),
+                    _ => {
+                        return Err(e.node.at.error(format!(
+                            "sweep `{}` must be a non-empty array of values, e.g. [1, 2, 3]",
+                            e.key
+                        )))
+                    }
+                }
+            }
+        }
+        let plan = BatchPlan {
+            base,
+            sweeps,
+            name_template,
+            name_at,
+        };
+        plan.check_template()?;
+        Ok(plan)
+    }
+
+    /// Number of jobs: the product of the sweeps' lengths (1 without sweeps).
+    pub fn job_count(&self) -> usize {
+        self.sweeps.iter().map(|s| s.values.len()).product()
+    }
+
+    /// Every job, in id order; the first sweep varies slowest.
+    pub fn jobs(&self) -> Vec<JobSpec> {
+        (0..self.job_count()).map(|id| self.job(id)).collect()
+    }
+
+    /// Job `id` (mixed-radix digits of the id, last sweep fastest).
+    pub fn job(&self, id: usize) -> JobSpec {
+        let mut rest = id;
+        let mut values = vec![None; self.sweeps.len()];
+        for (slot, sweep) in values.iter_mut().zip(&self.sweeps).rev() {
+            let n = sweep.values.len();
+            *slot = Some((sweep.path.clone(), sweep.values[rest % n].clone()));
+            rest /= n;
+        }
+        JobSpec {
+            id,
+            values: values.into_iter().flatten().collect(),
+        }
+    }
+
+    /// The scene, format, file name and hash of `job`.
+    pub fn prepare(&self, job: &JobSpec) -> Result<PreparedJob> {
+        let mut document = self.base.clone();
+        for (path, value) in &job.values {
+            document.set_node(path, value.clone())?;
+        }
+        let scene = document.build()?;
+        let format = document.output_format()?;
+        let file_name = self.file_name(job, format)?;
+        let scene_hash = scene_hash(&scene, format);
+        Ok(PreparedJob {
+            scene,
+            format,
+            file_name,
+            scene_hash,
+        })
+    }
+
+    /// The template with `{job}` (the id, zero-padded to the width of the largest id) and
+    /// `{path}` or `{last.segment}` of each sweep replaced; values made file-name safe.
+    pub fn file_name(&self, job: &JobSpec, format: OutputFormat) -> Result<String> {
+        let width = self.job_count().saturating_sub(1).to_string().len();
+        let mut name = String::new();
+        let mut rest = self.name_template.as_str();
+        while let Some(open) = rest.find('{') {
+            name.push_str(&rest[..open]);
+            let Some(close) = rest[open..].find('}') else {
+                return Err(self.name_at.error("`name` has a `{` without its `}`"));
+            };
+            let key = &rest[open + 1..open + close];
+            let value = if key == "job" {
+                format!("{:0width$}", job.id)
+            } else {
+                let index = self.placeholder(key)?;
+                sanitize(&job.values[index].1.value.to_text())
+            };
+            name.push_str(&value);
+            rest = &rest[open + close + 1..];
+        }
+        name.push_str(rest);
+        let extension = match format {
+            OutputFormat::Png => ".png",
+            OutputFormat::Exr => ".exr",
+        };
+        if !name.to_ascii_lowercase().ends_with(extension) {
+            name.push_str(extension);
+        }
+        Ok(name)
+    }
+
+    /// The sweep a placeholder names: its full path, or its last segment if no other sweep's
+    /// last segment is the same.
+    fn placeholder(&self, key: &str) -> Result<usize> {
+        if let Some(k) = self.sweeps.iter().position(|s| s.path == key) {
+            return Ok(k);
+        }
+        let matches: Vec<usize> = (0..self.sweeps.len())
+            .filter(|&k| self.sweeps[k].path.rsplit('.').next() == Some(key))
+            .collect();
+        match matches[..] {
+            [k] => Ok(k),
+            _ => {
+                let valid: Vec<String> = std::iter::once("{job}".to_string())
+                    .chain(self.sweeps.iter().map(|s| format!("{{{}}}", s.path)))
+                    .collect();
+                Err(self.name_at.error(format!(
+                    "`name` placeholder {{{key}}} names no sweep{}; valid: {}",
+                    if matches.len() > 1 {
+                        " unambiguously"
+                    } else {
+                        ""
+                    },
+                    valid.join(", ")
+                )))
+            }
+        }
+    }
+
+    fn check_template(&self) -> Result<()> {
+        let names: Vec<String> = self
+            .jobs()
+            .iter()
+            .take(1)
+            .map(|job| self.file_name(job, OutputFormat::Png))
+            .collect::<Result<_>>()?;
+        if self.job_count() > 1 && !self.name_template.contains('{') {
+            return Err(self.name_at.error(format!(
+                "`name` = {:?} has no placeholder, so all {} jobs would write {}; add {{job}} or \
+                 a swept field such as {{{}}}",
+                self.name_template,
+                self.job_count(),
+                names.first().map_or("", String::as_str),
+                self.sweeps.first().map_or("job", |s| s.path.as_str())
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Keeps letters, digits, `.`, `-`, `_`; anything else becomes `-`.
+fn sanitize(text: &str) -> String {
+    text.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_') {
+                c
+            } else {
+                '-'
+            }
+        })
+        .collect::<String>()
+        .trim_matches('-')
+        .to_string()
+}
+
+/// SHA-256 of every resolved value of the scene (Debug prints each f64 exactly) and the format.
+/// Mesh and environment files enter by path, size and modification time.
+pub fn scene_hash(scene: &Scene, format: OutputFormat) -> String {
+    let mut hasher = Sha256::new();
+    hasher.update(format!("{scene:?}|{format:?}").as_bytes());
+    let mut stamp = |path: &Path| {
+        if let Ok(m) = std::fs::metadata(path) {
+            hasher.update(format!(
+                "|{}:{}:{:?}",
+                path.display(),
+                m.len(),
+                m.modified().ok()
+            ));
+        }
+    };
+    for object in &scene.objects {
+        if let super::MeshSource::File(path) = &object.mesh {
+            stamp(path);
+        }
+        if let Some(path) = &object.material.fresnel_file {
+            stamp(path);
+        }
+    }
+    if let super::EnvironmentSpec::Map { source, .. } = &scene.environment {
+        stamp(Path::new(source));
+    }
+    hasher
+        .finalize()
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// `I/N` with N ≥ 1 and I < N.
+pub fn parse_shard(text: &str) -> std::result::Result<(usize, usize), String> {
+    let err = || format!("shard {text:?}: expected I/N with 0 ≤ I < N, e.g. 0/4");
+    let (i, n) = text.split_once('/').ok_or_else(err)?;
+    let i: usize = i.trim().parse().map_err(|_| err())?;
+    let n: usize = n.trim().parse().map_err(|_| err())?;
+    if n == 0 || i >= n {
+        return Err(err());
+    }
+    Ok((i, n))
+}
+
+/// Whether job `id` belongs to shard `i` of `n`: round-robin, so shards stay balanced whatever
+/// the sweep order, and any two shards are disjoint and all together cover every id.
+pub fn in_shard(id: usize, (i, n): (usize, usize)) -> bool {
+    id % n == i
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const JOBS: &str = "name = \"{preset}-r{r}-{job}\"\n\
+        [scene]\n[[scene.object]]\nmesh = \"builtin:sphere\"\n\
+        [sweep]\n\"object.0.material.preset\" = [\"smooth-red\", \"rough-red\"]\n\
+        \"object.0.material.r\" = [1, 2, 3]\n";
+
+    #[test]
+    fn sweep_is_the_cartesian_product_first_key_slowest() {
+        let plan = BatchPlan::parse(JOBS, "jobs.toml", Path::new(".")).unwrap();
+        assert_eq!(plan.job_count(), 6);
+        let names: Vec<String> = plan
+            .jobs()
+            .iter()
+            .map(|j| plan.file_name(j, OutputFormat::Png).unwrap())
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "smooth-red-r1-0.png",
+                "smooth-red-r2-1.png",
+                "smooth-red-r3-2.png",
+                "rough-red-r1-3.png",
+                "rough-red-r2-4.png",
+                "rough-red-r3-5.png"
+            ]
+        );
+        let job = plan.prepare(&plan.job(4)).unwrap();
+        assert_eq!(job.scene.objects[0].material.lacquer_ratio, 2.0);
+        assert_eq!(job.scene.objects[0].material.beckmann_m, 0.20);
+    }
+
+    #[test]
+    fn shards_are_disjoint_and_cover_every_job() {
+        for n in 1..6 {
+            for id in 0..40 {
+                let owners = (0..n).filter(|&i| in_shard(id, (i, n))).count();
+                assert_eq!(owners, 1, "job {id} with {n} shards");
+            }
+        }
+        assert_eq!(parse_shard("1/2"), Ok((1, 2)));
+        assert!(parse_shard("2/2").is_err() && parse_shard("0/0").is_err());
+    }
+
+    #[test]
+    fn hash_changes_with_any_swept_value_and_only_then() {
+        let plan = BatchPlan::parse(JOBS, "jobs.toml", Path::new(".")).unwrap();
+        let hashes: Vec<String> = plan
+            .jobs()
+            .iter()
+            .map(|j| plan.prepare(j).unwrap().scene_hash)
+            .collect();
+        let again = plan.prepare(&plan.job(0)).unwrap().scene_hash;
+        assert_eq!(hashes[0], again);
+        let mut unique = hashes.clone();
+        unique.sort();
+        unique.dedup();
+        assert_eq!(unique.len(), 6);
+    }
+
+    #[test]
+    fn template_without_placeholder_is_rejected_for_many_jobs() {
+        let text = JOBS.replace("{preset}-r{r}-{job}", "same");
+        let err = BatchPlan::parse(&text, "jobs.toml", Path::new(".")).unwrap_err();
+        assert!(err.to_string().contains("jobs.toml:1"), "{err}");
+    }
+}

@@ -1,0 +1,273 @@
+//! Executes a [`BatchPlan`]: one GPU context and one [`SceneRenderer`] for the whole run; the
+//! render thread hands each image to a writer thread (bounded channel) that encodes, writes,
+//! records the manifest and keeps the contact-sheet tile, so encoding overlaps the next render.
+//!
+//! A failed job is reported, recorded (`failed: …` in the manifest, a red tile) and leaves no
+//! output file; the run continues and [`BatchSummary::failed`] makes the exit code non-zero.
+
+use std::collections::BTreeMap;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use super::manifest::{self, Manifest, ManifestRow, STATUS_OK};
+use super::sheet::{contact_sheet_png, Thumbnail, Tile};
+use super::{in_shard, BatchPlan, JobSpec, PreparedJob};
+use crate::gpu::GpuContext;
+use crate::output::{self, HdrImage, OutputFormat, PngSettings};
+use crate::scene::SceneRenderer;
+use crate::{Error, Result};
+
+/// Images waiting for the writer; two keep the GPU busy while one encodes without holding many
+/// full-size images in memory.
+const WRITER_QUEUE: usize = 2;
+
+/// What `shikki batch` was asked to do.
+#[derive(Clone, Debug)]
+pub struct BatchOptions {
+    pub out_dir: PathBuf,
+    /// (I, N): this process renders the jobs with id % N == I.
+    pub shard: (usize, usize),
+    /// Render every job even if its output and manifest hash match.
+    pub force: bool,
+    /// Show the progress bar (only drawn when stderr is a terminal).
+    pub progress: bool,
+}
+
+/// How a run ended.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct BatchSummary {
+    pub rendered: usize,
+    pub skipped: usize,
+    pub failed: usize,
+    pub manifest: PathBuf,
+    pub contact_sheet: PathBuf,
+}
+
+/// What the render thread tells the writer.
+enum Message {
+    Render {
+        row: ManifestRow,
+        path: PathBuf,
+        image: HdrImage,
+        png: PngSettings,
+    },
+    Skipped {
+        row: ManifestRow,
+        path: PathBuf,
+    },
+    Failed {
+        row: ManifestRow,
+    },
+}
+
+/// Runs the jobs of `plan` in this shard (see the module doc).
+pub fn run_batch(
+    gpu: &GpuContext,
+    plan: &BatchPlan,
+    options: &BatchOptions,
+) -> Result<BatchSummary> {
+    std::fs::create_dir_all(&options.out_dir).map_err(|e| Error::Write {
+        path: options.out_dir.clone(),
+        message: format!("cannot create the output directory: {e}"),
+    })?;
+    let jobs: Vec<JobSpec> = plan
+        .jobs()
+        .into_iter()
+        .filter(|j| in_shard(j.id, options.shard))
+        .collect();
+    let previous = if options.force {
+        BTreeMap::new()
+    } else {
+        manifest::previous_rows(&options.out_dir)
+    };
+    let sweep_paths: Vec<String> = plan.sweeps.iter().map(|s| s.path.clone()).collect();
+    let manifest_path = options.out_dir.join(manifest::manifest_name(options.shard));
+    let sheet_name = match options.shard {
+        (_, 1) => "contact_sheet.png".to_string(),
+        (i, n) => format!("contact_sheet-shard-{i}-of-{n}.png"),
+    };
+    let progress = progress_bar(jobs.len(), options.progress);
+    let mut renderer = SceneRenderer::new(gpu)?;
+
+    let (sender, receiver) = mpsc::sync_channel::<Message>(WRITER_QUEUE);
+    let writer_manifest = Manifest::new(manifest_path.clone(), &sweep_paths);
+    let writer_progress = progress.clone();
+    let result = std::thread::scope(|scope| {
+        let writer = scope.spawn(move || write_loop(receiver, writer_manifest, writer_progress));
+        for job in &jobs {
+            let message = render_job(gpu, &mut renderer, plan, job, &options.out_dir, &previous);
+            if let Message::Failed { row } = &message {
+                progress.suspend(|| eprintln!("error: job {}: {}", row.job, row.status));
+            }
+            if sender.send(message).is_err() {
+                break; // The writer stopped: its error is returned below.
+            }
+        }
+        drop(sender);
+        writer
+            .join()
+            .map_err(|_| Error::invalid("batch", "writer thread", "panicked; please report"))?
+    });
+    progress.finish_and_clear();
+    let (manifest, tiles, counts) = result?;
+    let sheet_path = options.out_dir.join(sheet_name);
+    let labelled: Vec<Tile> = tiles.into_values().collect();
+    output::atomic::write_atomically(&sheet_path, &contact_sheet_png(&labelled)?)?;
+    Ok(BatchSummary {
+        rendered: counts.0,
+        skipped: counts.1,
+        failed: counts.2,
+        manifest: manifest.path,
+        contact_sheet: sheet_path,
+    })
+}
+
+fn progress_bar(len: usize, wanted: bool) -> ProgressBar {
+    if !wanted || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::with_draw_target(Some(len as u64), ProgressDrawTarget::stderr());
+    if let Ok(style) =
+        ProgressStyle::with_template("{bar:40} {pos}/{len} jobs  {per_sec}  ETA {eta}  {msg}")
+    {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// Prepares and renders one job (or decides to skip it); never fails the run.
+fn render_job(
+    gpu: &GpuContext,
+    renderer: &mut SceneRenderer,
+    plan: &BatchPlan,
+    job: &JobSpec,
+    out_dir: &Path,
+    previous: &BTreeMap<usize, ManifestRow>,
+) -> Message {
+    let mut row = ManifestRow {
+        job: job.id,
+        values: job.values.iter().map(|(_, v)| v.value.to_text()).collect(),
+        output: String::new(),
+        scene_hash: String::new(),
+        status: STATUS_OK.into(),
+    };
+    let prepared: Result<PreparedJob> = plan.prepare(job);
+    let prepared = match prepared {
+        Ok(p) => p,
+        Err(e) => {
+            row.status = format!("failed: {e}");
+            return Message::Failed { row };
+        }
+    };
+    let path = out_dir.join(&prepared.file_name);
+    row.output = prepared.file_name.clone();
+    row.scene_hash = prepared.scene_hash.clone();
+    if manifest::is_done(previous.get(&job.id), &prepared.scene_hash, &path) {
+        return Message::Skipped { row, path };
+    }
+    let png = PngSettings {
+        exposure_ev: prepared.scene.output.exposure_ev,
+        tone_curve: prepared.scene.output.tone_curve,
+    };
+    let rendered =
+        output::preflight_output(&path).and_then(|_| renderer.render(gpu, &prepared.scene));
+    match rendered {
+        Ok(image) => Message::Render {
+            row,
+            path,
+            image,
+            png,
+        },
+        Err(e) => {
+            // A file from an earlier run would pass for this job's output.
+            let _ = output::atomic::discard_stale_output(&path);
+            row.status = format!("failed: {e}");
+            Message::Failed { row }
+        }
+    }
+}
+
+type WriterResult = (Manifest, BTreeMap<usize, Tile>, (usize, usize, usize));
+
+/// The writer thread: encode + write, manifest row, tile, progress; the manifest is saved after
+/// every job so a killed run can resume.
+fn write_loop(
+    receiver: mpsc::Receiver<Message>,
+    mut manifest: Manifest,
+    progress: ProgressBar,
+) -> Result<WriterResult> {
+    let mut tiles = BTreeMap::new();
+    let (mut rendered, mut skipped, mut failed) = (0, 0, 0);
+    for message in receiver {
+        let (mut row, image) = match message {
+            Message::Render {
+                row,
+                path,
+                image,
+                png,
+            } => match output::write_image(&path, &image, &png) {
+                Ok(()) => {
+                    rendered += 1;
+                    (row, Some(Thumbnail::from_hdr(&image, &png)))
+                }
+                Err(e) => {
+                    let row = ManifestRow {
+                        status: format!("failed: {e}"),
+                        ..row
+                    };
+                    (row, None)
+                }
+            },
+            Message::Skipped { row, path } => {
+                skipped += 1;
+                (row, thumbnail_from_file(&path))
+            }
+            Message::Failed { row } => (row, None),
+        };
+        if row.status != STATUS_OK {
+            failed += 1;
+            if image.is_none() && !row.output.is_empty() {
+                row.output.clear();
+            }
+        }
+        let mut lines = vec![format!("#{}", row.job)];
+        lines.extend(
+            manifest
+                .columns
+                .iter()
+                .zip(&row.values)
+                .map(|(path, value)| format!("{} = {value}", short_path(path))),
+        );
+        if row.status != STATUS_OK {
+            lines.push("FAILED (see manifest)".into());
+        }
+        tiles.insert(row.job, Tile { image, lines });
+        manifest.rows.insert(row.job, row);
+        manifest.save()?;
+        progress.inc(1);
+    }
+    Ok((manifest, tiles, (rendered, skipped, failed)))
+}
+
+/// `object.0.material.r` → `0.material.r`: enough to tell sweeps apart on a 192-pixel tile.
+fn short_path(path: &str) -> &str {
+    path.strip_prefix("object.").unwrap_or(path)
+}
+
+/// The tile of a job skipped on resume, read back from its output.
+fn thumbnail_from_file(path: &Path) -> Option<Thumbnail> {
+    let bytes = std::fs::read(path).ok()?;
+    match OutputFormat::from_path(path).ok()? {
+        OutputFormat::Png => {
+            let (w, h, pixels) = output::png::decode_png_rgba8(&bytes).ok()?;
+            Some(Thumbnail::from_rgba8(w, h, &pixels))
+        }
+        OutputFormat::Exr => {
+            let image = output::exr::decode_exr(&bytes).ok()?;
+            Some(Thumbnail::from_hdr(&image, &PngSettings::default()))
+        }
+    }
+}

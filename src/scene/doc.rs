@@ -1,0 +1,467 @@
+//! The scene document: a TOML tree in which every value remembers where it came from (file, line,
+//! column and the directory its relative paths resolve against, or the `--set`/sweep override that
+//! put it there). Owns reading TOML with spans, overriding a value by a dotted path
+//! (`object.0.material.r`) and located error messages. It knows nothing of what the keys mean:
+//! that is [`super::parse`].
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use toml::de::{DeTable, DeValue};
+
+use crate::{Error, Result};
+
+/// Where a value came from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Origin {
+    /// A span of a file: 1-based line and column (in characters).
+    File {
+        source: Arc<str>,
+        line: usize,
+        column: usize,
+        base_dir: Arc<Path>,
+    },
+    /// A command-line `--set` or a batch sweep; `what` names it, e.g. `--set camera.fov_deg`.
+    Override { what: Arc<str>, base_dir: Arc<Path> },
+}
+
+impl Origin {
+    /// The directory a relative path written here resolves against.
+    pub fn base_dir(&self) -> &Path {
+        match self {
+            Origin::File { base_dir, .. } | Origin::Override { base_dir, .. } => base_dir,
+        }
+    }
+
+    /// An error at this place: `file:line: column c: message`, or naming the override.
+    pub fn error(&self, message: impl std::fmt::Display) -> Error {
+        match self {
+            Origin::File {
+                source,
+                line,
+                column,
+                ..
+            } => Error::parse(
+                source.as_ref(),
+                *line,
+                format!("column {column}: {message}"),
+            ),
+            Origin::Override { what, .. } => Error::invalid(what.as_ref(), "", message.to_string()),
+        }
+    }
+
+    /// A short human form for listings: `file:line:col` or the override's name.
+    pub fn describe(&self) -> String {
+        match self {
+            Origin::File {
+                source,
+                line,
+                column,
+                ..
+            } => format!("{source}:{line}:{column}"),
+            Origin::Override { what, .. } => what.to_string(),
+        }
+    }
+}
+
+/// A TOML value with its origin.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Node {
+    pub value: Value,
+    pub at: Origin,
+}
+
+/// A table entry: the key keeps its own origin so "unknown key" points at the key.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Entry {
+    pub key: String,
+    pub key_at: Origin,
+    pub node: Node,
+}
+
+/// TOML's value kinds (datetimes are kept only as a type name for errors).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Value {
+    Integer(i64),
+    Float(f64),
+    Bool(bool),
+    Str(String),
+    Array(Vec<Node>),
+    Table(Vec<Entry>),
+    Datetime,
+}
+
+impl Value {
+    /// "a number", "an array", …: for "expected …, found …".
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Value::Integer(_) => "an integer",
+            Value::Float(_) => "a float",
+            Value::Bool(_) => "a boolean",
+            Value::Str(_) => "a string",
+            Value::Array(_) => "an array",
+            Value::Table(_) => "a table",
+            Value::Datetime => "a datetime",
+        }
+    }
+
+    /// The value as TOML text, for manifests, labels and material `set`.
+    pub fn to_text(&self) -> String {
+        match self {
+            Value::Integer(i) => i.to_string(),
+            Value::Float(f) => format!("{f}"),
+            Value::Bool(b) => b.to_string(),
+            Value::Str(s) => s.clone(),
+            Value::Array(items) => {
+                let parts: Vec<String> = items.iter().map(|n| n.value.to_text()).collect();
+                format!("[{}]", parts.join(", "))
+            }
+            Value::Table(entries) => {
+                let parts: Vec<String> = entries
+                    .iter()
+                    .map(|e| format!("{} = {}", e.key, e.node.value.to_text()))
+                    .collect();
+                format!("{{{}}}", parts.join(", "))
+            }
+            Value::Datetime => "datetime".into(),
+        }
+    }
+}
+
+/// Parses TOML `text` into a located tree; a syntax error names `source:line` and the column.
+pub fn parse_document(text: &str, source: &str, base_dir: &Path) -> Result<Node> {
+    let located = Locator {
+        text,
+        source: Arc::from(source),
+        base_dir: Arc::from(base_dir),
+    };
+    let table = DeTable::parse(text).map_err(|e| {
+        located
+            .origin(e.span().unwrap_or(0..0))
+            .error(e.message().trim_end())
+    })?;
+    Ok(Node {
+        value: located.table(table.get_ref()),
+        at: located.origin(0..0),
+    })
+}
+
+/// Turns byte spans into [`Origin`]s of one file.
+struct Locator<'a> {
+    text: &'a str,
+    source: Arc<str>,
+    base_dir: Arc<Path>,
+}
+
+impl Locator<'_> {
+    fn origin(&self, span: Range<usize>) -> Origin {
+        let offset = span.start.min(self.text.len());
+        let before = self.text.get(..offset).unwrap_or("");
+        let line = before.matches('\n').count() + 1;
+        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+        let column = before.get(line_start..).map_or(0, |s| s.chars().count()) + 1;
+        Origin::File {
+            source: self.source.clone(),
+            line,
+            column,
+            base_dir: self.base_dir.clone(),
+        }
+    }
+
+    /// Entries in the order they appear in the file (the map itself is sorted by key).
+    fn table(&self, table: &DeTable) -> Value {
+        let mut entries: Vec<(usize, Entry)> = table
+            .iter()
+            .map(|(key, value)| {
+                (
+                    key.span().start,
+                    Entry {
+                        key: key.get_ref().to_string(),
+                        key_at: self.origin(key.span()),
+                        node: self.node(value.get_ref(), value.span()),
+                    },
+                )
+            })
+            .collect();
+        entries.sort_by_key(|(start, _)| *start);
+        Value::Table(entries.into_iter().map(|(_, e)| e).collect())
+    }
+
+    fn node(&self, value: &DeValue, span: Range<usize>) -> Node {
+        let at = self.origin(span);
+        let value = match value {
+            DeValue::Integer(i) => match i64::from_str_radix(i.as_str(), i.radix()) {
+                Ok(v) => Value::Integer(v),
+                Err(_) => Value::Float(i.as_str().parse().unwrap_or(f64::NAN)),
+            },
+            DeValue::Float(f) => Value::Float(parse_toml_float(f.as_str())),
+            DeValue::Boolean(b) => Value::Bool(*b),
+            DeValue::String(s) => Value::Str(s.to_string()),
+            DeValue::Array(items) => Value::Array(
+                items
+                    .iter()
+                    .map(|v| self.node(v.get_ref(), v.span()))
+                    .collect(),
+            ),
+            DeValue::Table(table) => self.table(table),
+            DeValue::Datetime(_) => Value::Datetime,
+        };
+        Node { value, at }
+    }
+}
+
+/// TOML floats include `inf`, `nan` and `_` separators; Rust's parser takes neither spelling.
+fn parse_toml_float(text: &str) -> f64 {
+    let clean: String = text.chars().filter(|c| *c != '_').collect();
+    match clean.trim_start_matches(['+', '-']) {
+        "inf" if clean.starts_with('-') => f64::NEG_INFINITY,
+        "inf" => f64::INFINITY,
+        "nan" => f64::NAN,
+        _ => clean.parse().unwrap_or(f64::NAN),
+    }
+}
+
+/// Parses the text of a `--set` value as a TOML value (`2`, `[0, 1, 4]`, `"x"`, `true`); text that
+/// is not TOML (`builtin:plate`, `smooth-red`) is taken as a string.
+pub fn parse_override_value(text: &str, what: &str, base_dir: &Path) -> Node {
+    let at = Origin::Override {
+        what: Arc::from(what),
+        base_dir: Arc::from(base_dir),
+    };
+    let parsed = parse_document(&format!("v = {text}"), what, base_dir)
+        .ok()
+        .and_then(|doc| match doc.value {
+            Value::Table(mut entries) if entries.len() == 1 => entries.pop().map(|e| e.node.value),
+            _ => None,
+        });
+    let value = parsed.unwrap_or_else(|| Value::Str(text.trim().to_string()));
+    relocate(Node { value, at })
+}
+
+/// Gives every nested node the origin of the root (an override has one place: its own name).
+fn relocate(node: Node) -> Node {
+    let at = node.at.clone();
+    let value = match node.value {
+        Value::Array(items) => Value::Array(
+            items
+                .into_iter()
+                .map(|n| {
+                    relocate(Node {
+                        at: at.clone(),
+                        ..n
+                    })
+                })
+                .collect(),
+        ),
+        Value::Table(entries) => Value::Table(
+            entries
+                .into_iter()
+                .map(|e| Entry {
+                    key: e.key,
+                    key_at: at.clone(),
+                    node: relocate(Node {
+                        at: at.clone(),
+                        ..e.node
+                    }),
+                })
+                .collect(),
+        ),
+        other => other,
+    };
+    Node { value, at }
+}
+
+/// The key a string stands for when a path goes through it: `material = "red.toml"` overridden
+/// at `material.r` becomes `{ file = "red.toml", r = … }`; likewise `environment = "none"`.
+fn string_as_table_key(parent_key: &str) -> Option<&'static str> {
+    match parent_key {
+        "material" => Some("file"),
+        "environment" => Some("source"),
+        _ => None,
+    }
+}
+
+/// Replaces (or adds) the value at the dotted `path` of `root` by `value`. Numeric segments index
+/// arrays (`object.0`); missing tables on the way are created. The error names the path and what
+/// was found where it stopped.
+pub fn set_path(root: &mut Node, path: &str, value: Node) -> Result<()> {
+    let segments: Vec<&str> = path.split('.').map(str::trim).collect();
+    if segments.iter().any(|s| s.is_empty()) {
+        return Err(value.at.error(format!(
+            "`{path}` is not a field path; write segments separated by dots, e.g. \
+             object.0.material.r or camera.fov_deg"
+        )));
+    }
+    let mut current = root;
+    let mut parent_key = "";
+    for (i, segment) in segments.iter().enumerate() {
+        let last = i + 1 == segments.len();
+        if let (Value::Str(s), Some(key)) = (&current.value, string_as_table_key(parent_key)) {
+            let inner = Node {
+                value: Value::Str(s.clone()),
+                at: current.at.clone(),
+            };
+            current.value = Value::Table(vec![Entry {
+                key: key.to_string(),
+                key_at: current.at.clone(),
+                node: inner,
+            }]);
+        }
+        let at = current.at.clone();
+        current = match &mut current.value {
+            Value::Table(entries) => {
+                let index = match entries.iter().position(|e| e.key == *segment) {
+                    Some(index) => index,
+                    None => {
+                        entries.push(Entry {
+                            key: segment.to_string(),
+                            key_at: value.at.clone(),
+                            node: Node {
+                                value: Value::Table(Vec::new()),
+                                at: value.at.clone(),
+                            },
+                        });
+                        entries.len() - 1
+                    }
+                };
+                &mut entries[index].node
+            }
+            Value::Array(items) => {
+                let len = items.len();
+                let index = segment.parse::<usize>().ok().filter(|&k| k < len);
+                match index {
+                    Some(k) => &mut items[k],
+                    None => {
+                        return Err(value.at.error(format!(
+                            "`{path}`: `{segment}` must index the array defined at {} \
+                             (0..{len})",
+                            at.describe(),
+                            len = len
+                        )))
+                    }
+                }
+            }
+            other => {
+                return Err(value.at.error(format!(
+                    "`{path}`: cannot go into `{parent_key}`, which is {} (at {})",
+                    other.type_name(),
+                    at.describe()
+                )))
+            }
+        };
+        if last {
+            *current = value;
+            return Ok(());
+        }
+        parent_key = segment;
+    }
+    Ok(())
+}
+
+/// Levenshtein distance, for "did you mean".
+pub fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let substitute = diagonal + usize::from(ca != *cb);
+            diagonal = row[j + 1];
+            row[j + 1] = substitute.min(row[j] + 1).min(diagonal + 1);
+        }
+    }
+    row[b.len()]
+}
+
+/// "unknown key `x` in [camera]; valid keys are …; did you mean `y`?"
+pub fn unknown_key(entry: &Entry, section: &str, valid: &[&str]) -> Error {
+    let mut message = format!(
+        "unknown key `{}` in {section}; valid keys are {}",
+        entry.key,
+        valid.join(", ")
+    );
+    if let Some(near) = valid.iter().min_by_key(|v| edit_distance(v, &entry.key)) {
+        message.push_str(&format!("; did you mean `{near}`?"));
+    }
+    entry.key_at.error(message)
+}
+
+/// A path relative to where it was written.
+pub fn resolve_path(at: &Origin, path: &str) -> PathBuf {
+    at.base_dir().join(path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn doc(text: &str) -> Node {
+        parse_document(text, "s.toml", Path::new("/base")).unwrap()
+    }
+
+    fn entry<'a>(node: &'a Node, key: &str) -> &'a Node {
+        match &node.value {
+            Value::Table(entries) => &entries.iter().find(|e| e.key == key).unwrap().node,
+            other => panic!("not a table: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn origins_count_lines_and_columns_from_one() {
+        // `fov_deg = 30` on line 3, its value starts at character 11 (hand-counted).
+        let d = doc("# c\n[camera]\nfov_deg = 30\n");
+        let fov = entry(entry(&d, "camera"), "fov_deg");
+        assert_eq!(fov.value, Value::Integer(30));
+        assert_eq!(fov.at.describe(), "s.toml:3:11");
+    }
+
+    #[test]
+    fn syntax_error_names_line_and_column() {
+        let err = parse_document("a = 1\nb = = 2\n", "s.toml", Path::new(".")).unwrap_err();
+        match err {
+            Error::Parse { file, line, .. } => assert_eq!((file.as_str(), line), ("s.toml", 2)),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn set_path_indexes_arrays_and_creates_tables() {
+        let mut d = doc("[[object]]\nmesh = \"builtin:bowl\"\n[[object]]\nmesh = \"x\"\n");
+        let two = parse_override_value("2", "--set object.1.material.r", Path::new("."));
+        set_path(&mut d, "object.1.material.r", two).unwrap();
+        let objects = match &entry(&d, "object").value {
+            Value::Array(items) => items.clone(),
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(
+            entry(entry(&objects[1], "material"), "r").value,
+            Value::Integer(2)
+        );
+        let bad = parse_override_value("1", "--set object.2.mesh", Path::new("."));
+        assert!(set_path(&mut d, "object.2.mesh", bad).is_err());
+    }
+
+    #[test]
+    fn material_string_becomes_a_file_table_when_overridden() {
+        let mut d = doc("[[object]]\nmaterial = \"red.toml\"\n");
+        let v = parse_override_value("3", "sweep", Path::new("."));
+        set_path(&mut d, "object.0.material.r", v).unwrap();
+        let Value::Array(objects) = &entry(&d, "object").value else {
+            panic!()
+        };
+        let material = entry(&objects[0], "material");
+        assert_eq!(entry(material, "file").value, Value::Str("red.toml".into()));
+        assert_eq!(entry(material, "r").value, Value::Integer(3));
+    }
+
+    #[test]
+    fn override_values_parse_as_toml_or_fall_back_to_strings() {
+        let p = |t: &str| parse_override_value(t, "x", Path::new(".")).value;
+        assert_eq!(p("2.5"), Value::Float(2.5));
+        assert_eq!(p("builtin:plate"), Value::Str("builtin:plate".into()));
+        assert_eq!(p("smooth-red"), Value::Str("smooth-red".into()));
+        assert!(matches!(p("[0, 1, 4]"), Value::Array(v) if v.len() == 3));
+    }
+}

@@ -1,0 +1,692 @@
+//! The scene schema (docs/scene.md): from a located TOML tree ([`super::doc`]) to a [`Scene`].
+//!
+//! Owns the key names, their defaults and types, and the rule that every error names where the
+//! value was written. The ranges of each quantity stay with their owners (`Camera::validate`,
+//! `Light::validate`, `LacquerMaterial::set/validate`, `Mesh::validate`); their messages are
+//! wrapped with the location here, never re-checked.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, OnceLock};
+
+use glam::{DMat4, DQuat, DVec3, EulerRot};
+
+use super::doc::{self, Entry, Node, Origin, Value};
+use super::{EnvironmentSpec, MeshSource, OutputSpec, Scene, SceneObject};
+use crate::environment::load::BUILTIN_STUDIO;
+use crate::model::fresnel::FresnelTable;
+use crate::model::material::MATERIAL_KEYS;
+use crate::model::material_file::load_material_file;
+use crate::model::LacquerMaterial;
+use crate::output::{OutputFormat, ToneCurve};
+use crate::raster::draw::{Background, SUPPORTED_SAMPLES};
+use crate::raster::lights::{default_lights, Light, MAX_LIGHTS};
+use crate::raster::mesh::{BuiltinMesh, Mesh};
+use crate::raster::mesh_io::load_mesh;
+use crate::raster::Camera;
+use crate::{Error, Result};
+
+const TOP_KEYS: &[&str] = &["camera", "object", "light", "environment", "output"];
+const CAMERA_KEYS: &[&str] = &["eye", "target", "up", "fov_deg", "orbit_deg"];
+const OBJECT_KEYS: &[&str] = &[
+    "mesh",
+    "translate",
+    "rotate_deg",
+    "scale",
+    "transform",
+    "material",
+];
+const LIGHT_KEYS: &[&str] = &["kind", "to_light", "irradiance", "position", "intensity"];
+const ENVIRONMENT_KEYS: &[&str] = &["source", "intensity", "rotation_deg"];
+const OUTPUT_KEYS: &[&str] = &[
+    "size",
+    "width",
+    "height",
+    "samples",
+    "exposure",
+    "tonemap",
+    "format",
+    "background",
+];
+
+/// A scene as written plus overrides: what `--set` and batch sweeps edit before [`Self::build`].
+#[derive(Clone, Debug)]
+pub struct SceneDocument {
+    pub root: Node,
+}
+
+impl SceneDocument {
+    /// Parses TOML text (syntax errors name `source_name:line` and the column).
+    pub fn parse(text: &str, source_name: &str, base_dir: &Path) -> Result<Self> {
+        Ok(SceneDocument {
+            root: doc::parse_document(text, source_name, base_dir)?,
+        })
+    }
+
+    /// Reads a scene file; relative paths in it resolve against its directory.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let base_dir = path.parent().unwrap_or(Path::new(""));
+        Self::parse(&text, &path.display().to_string(), base_dir)
+    }
+
+    /// `--set path=value`: the value is TOML (`2`, `[0, 1, 4]`) or else a plain string. A path
+    /// starting with `material.` sets that field of every object's material.
+    pub fn set(&mut self, assignment: &str, base_dir: &Path) -> Result<()> {
+        let (path, text) = assignment.split_once('=').ok_or_else(|| {
+            Error::invalid(
+                "--set",
+                assignment,
+                "expected PATH=VALUE, e.g. --set camera.fov_deg=30 or --set object.0.material.r=2",
+            )
+        })?;
+        let path = path.trim();
+        let value = doc::parse_override_value(text, &format!("--set {path}"), base_dir);
+        self.set_node(path, value)
+    }
+
+    /// Puts `value` at `path` (see [`Self::set`]).
+    pub fn set_node(&mut self, path: &str, value: Node) -> Result<()> {
+        if let Some(rest) = path.strip_prefix("material.") {
+            let count = match table_get(&self.root, "object").map(|n| &n.value) {
+                Some(Value::Array(items)) => items.len(),
+                _ => 0,
+            };
+            for k in 0..count {
+                doc::set_path(
+                    &mut self.root,
+                    &format!("object.{k}.material.{rest}"),
+                    value.clone(),
+                )?;
+            }
+            return Ok(());
+        }
+        doc::set_path(&mut self.root, path, value)
+    }
+
+    /// The scene, every value checked.
+    pub fn build(&self) -> Result<Scene> {
+        scene_from_document(&self.root)
+    }
+
+    /// `[output] format` (default png).
+    pub fn output_format(&self) -> Result<OutputFormat> {
+        let output = table_get(&self.root, "output");
+        match output.and_then(|o| table_get(o, "format")) {
+            None => Ok(OutputFormat::Png),
+            Some(node) => format_of(node),
+        }
+    }
+}
+
+fn format_of(node: &Node) -> Result<OutputFormat> {
+    match &node.value {
+        Value::Str(s) if s.eq_ignore_ascii_case("png") => Ok(OutputFormat::Png),
+        Value::Str(s) if s.eq_ignore_ascii_case("exr") => Ok(OutputFormat::Exr),
+        _ => Err(node.at.error(format!(
+            "`format` must be \"png\" (8-bit sRGB after exposure and tone curve) or \
+             \"exr\" (linear float32 radiance), found {}",
+            show(node)
+        ))),
+    }
+}
+
+/// The entry `key` of a table node, if the node is a table and has it.
+pub fn table_get<'a>(node: &'a Node, key: &str) -> Option<&'a Node> {
+    match &node.value {
+        Value::Table(entries) => entries.iter().find(|e| e.key == key).map(|e| &e.node),
+        _ => None,
+    }
+}
+
+/// Checks `node` is a table with only `valid` keys and returns its entries.
+fn table<'a>(node: &'a Node, section: &str, valid: &[&str]) -> Result<&'a [Entry]> {
+    match &node.value {
+        Value::Table(entries) => {
+            if let Some(bad) = entries.iter().find(|e| !valid.contains(&e.key.as_str())) {
+                return Err(doc::unknown_key(bad, section, valid));
+            }
+            Ok(entries)
+        }
+        other => Err(node.at.error(format!(
+            "{section} must be a table, found {}",
+            other.type_name()
+        ))),
+    }
+}
+
+fn show(node: &Node) -> String {
+    format!("{} `{}`", node.value.type_name(), node.value.to_text())
+}
+
+fn number(node: &Node, key: &str) -> Result<f64> {
+    let x = match node.value {
+        Value::Integer(i) => i as f64,
+        Value::Float(f) => f,
+        _ => {
+            return Err(node
+                .at
+                .error(format!("`{key}` must be a number, found {}", show(node))))
+        }
+    };
+    if !x.is_finite() {
+        return Err(node.at.error(format!("`{key}` must be finite, found {x}")));
+    }
+    Ok(x)
+}
+
+fn vec3(node: &Node, key: &str) -> Result<DVec3> {
+    let wrong = || {
+        node.at.error(format!(
+            "`{key}` must be an array of three numbers [x, y, z], found {}",
+            show(node)
+        ))
+    };
+    match &node.value {
+        Value::Array(items) if items.len() == 3 => {
+            let mut v = [0.0; 3];
+            for (slot, item) in v.iter_mut().zip(items) {
+                *slot = number(item, key).map_err(|_| wrong())?;
+            }
+            Ok(DVec3::from_array(v))
+        }
+        _ => Err(wrong()),
+    }
+}
+
+fn string<'a>(node: &'a Node, key: &str) -> Result<&'a str> {
+    match &node.value {
+        Value::Str(s) => Ok(s),
+        _ => Err(node
+            .at
+            .error(format!("`{key}` must be a string, found {}", show(node)))),
+    }
+}
+
+fn whole(node: &Node, key: &str, range: std::ops::RangeInclusive<u32>) -> Result<u32> {
+    match node.value {
+        Value::Integer(i) if i >= i64::from(*range.start()) && i <= i64::from(*range.end()) => {
+            Ok(i as u32)
+        }
+        _ => Err(node.at.error(format!(
+            "`{key}` must be a whole number in {}..={}, found {}",
+            range.start(),
+            range.end(),
+            show(node)
+        ))),
+    }
+}
+
+/// Wraps an owner's validation error with where the value was written.
+fn located<T>(at: &Origin, result: Result<T>) -> Result<T> {
+    result.map_err(|e| at.error(e))
+}
+
+/// The whole scene from its document root.
+pub fn scene_from_document(root: &Node) -> Result<Scene> {
+    let entries = table(root, "the scene file", TOP_KEYS)?;
+    let get = |key: &str| entries.iter().find(|e| e.key == key).map(|e| &e.node);
+    let camera = match get("camera") {
+        Some(node) => camera(node)?,
+        None => Camera::default(),
+    };
+    let objects = match get("object") {
+        None => Vec::new(),
+        Some(node) => array_of_tables(node, "object")?
+            .iter()
+            .map(object)
+            .collect::<Result<_>>()?,
+    };
+    let lights = match get("light") {
+        None => default_lights(),
+        Some(node) => {
+            let items = array_of_tables(node, "light")?;
+            if items.len() > MAX_LIGHTS {
+                return Err(node.at.error(format!(
+                    "{} lights; a scene takes at most {MAX_LIGHTS}",
+                    items.len()
+                )));
+            }
+            items.iter().map(light).collect::<Result<_>>()?
+        }
+    };
+    let environment = match get("environment") {
+        None => EnvironmentSpec::Map {
+            source: BUILTIN_STUDIO.into(),
+            intensity: 1.0,
+            rotation_deg: 0.0,
+        },
+        Some(node) => environment(node)?,
+    };
+    let output = match get("output") {
+        None => OutputSpec::default(),
+        Some(node) => output(node)?,
+    };
+    Ok(Scene {
+        camera,
+        objects,
+        lights,
+        environment,
+        output,
+    })
+}
+
+fn array_of_tables<'a>(node: &'a Node, key: &str) -> Result<&'a [Node]> {
+    match &node.value {
+        Value::Array(items) => Ok(items),
+        _ => Err(node.at.error(format!(
+            "`{key}` must be an array of tables, written [[{key}]], found {}",
+            show(node)
+        ))),
+    }
+}
+
+/// `[camera]`: look-at camera; `orbit_deg` turns the eye about +Y around the target.
+fn camera(node: &Node) -> Result<Camera> {
+    let mut camera = Camera::default();
+    let mut orbit = 0.0;
+    for e in table(node, "[camera]", CAMERA_KEYS)? {
+        let n = &e.node;
+        match e.key.as_str() {
+            "eye" => camera.eye = vec3(n, "eye")?,
+            "target" => camera.target = vec3(n, "target")?,
+            "up" => camera.up = vec3(n, "up")?,
+            "fov_deg" => camera.fov_deg = number(n, "fov_deg")?,
+            _ => orbit = number(n, "orbit_deg")?,
+        }
+    }
+    let offset = camera.eye - camera.target;
+    camera.eye = camera.target + DQuat::from_rotation_y(orbit.to_radians()) * offset;
+    located(&node.at, camera.validate())?;
+    Ok(camera)
+}
+
+/// `[[object]]`: mesh, placement (translate/rotate_deg/scale or a 4×4 `transform`), material.
+fn object(node: &Node) -> Result<SceneObject> {
+    let entries = table(node, "[[object]]", OBJECT_KEYS)?;
+    let get = |key: &str| entries.iter().find(|e| e.key == key);
+    let mesh_node = get("mesh").map(|e| &e.node).ok_or_else(|| {
+        node.at.error(
+            "[[object]] needs `mesh`: \"builtin:bowl\" (or sphere, board, plate) or the path of \
+             an .obj, .gltf or .glb file",
+        )
+    })?;
+    let mesh = mesh_source(mesh_node)?;
+    let trs: Vec<&Entry> = ["translate", "rotate_deg", "scale"]
+        .iter()
+        .filter_map(|k| get(k))
+        .collect();
+    let transform = match (get("transform"), trs.first()) {
+        (Some(t), Some(other)) => {
+            return Err(other.key_at.error(format!(
+                "`{}` and `transform` (at {}) both place the object; use one or the other",
+                other.key,
+                t.key_at.describe()
+            )))
+        }
+        (Some(t), None) => matrix(&t.node)?,
+        (None, _) => {
+            let translate = get("translate").map(|e| vec3(&e.node, "translate"));
+            let rotate = get("rotate_deg").map(|e| vec3(&e.node, "rotate_deg"));
+            let scale = get("scale").map(|e| scale(&e.node));
+            let r = rotate.transpose()?.unwrap_or(DVec3::ZERO);
+            let rotation = DQuat::from_euler(
+                EulerRot::ZYX,
+                r.z.to_radians(),
+                r.y.to_radians(),
+                r.x.to_radians(),
+            );
+            DMat4::from_scale_rotation_translation(
+                scale.transpose()?.unwrap_or(DVec3::ONE),
+                rotation,
+                translate.transpose()?.unwrap_or(DVec3::ZERO),
+            )
+        }
+    };
+    let material = match get("material") {
+        None => LacquerMaterial::default(),
+        Some(e) => material(&e.node)?,
+    };
+    Ok(SceneObject {
+        mesh,
+        transform,
+        material,
+    })
+}
+
+fn scale(node: &Node) -> Result<DVec3> {
+    let s = match node.value {
+        Value::Array(_) => vec3(node, "scale")?,
+        _ => DVec3::splat(number(node, "scale")?),
+    };
+    if s.min_element() <= 0.0 {
+        return Err(node.at.error(
+            "`scale` must be positive (a number or [x, y, z]); mirror with `transform` instead",
+        ));
+    }
+    Ok(s)
+}
+
+/// `transform = [[row 0], [row 1], [row 2], [row 3]]`, rows as a matrix is written on paper
+/// (translation in the last column), affine (last row 0, 0, 0, 1).
+fn matrix(node: &Node) -> Result<DMat4> {
+    let wrong = || {
+        node.at.error(format!(
+            "`transform` must be 4 rows of 4 numbers, the last row [0, 0, 0, 1], found {}",
+            show(node)
+        ))
+    };
+    let Value::Array(rows) = &node.value else {
+        return Err(wrong());
+    };
+    if rows.len() != 4 {
+        return Err(wrong());
+    }
+    let mut m = [[0.0; 4]; 4];
+    for (i, row) in rows.iter().enumerate() {
+        let Value::Array(cells) = &row.value else {
+            return Err(wrong());
+        };
+        if cells.len() != 4 {
+            return Err(wrong());
+        }
+        for (j, cell) in cells.iter().enumerate() {
+            m[i][j] = number(cell, "transform")?;
+        }
+    }
+    if m[3] != [0.0, 0.0, 0.0, 1.0] {
+        return Err(wrong());
+    }
+    let matrix = DMat4::from_cols_array_2d(&m).transpose();
+    if matrix.determinant().abs() < 1e-12 {
+        return Err(node
+            .at
+            .error("`transform` is singular (determinant 0): it flattens the mesh"));
+    }
+    Ok(matrix)
+}
+
+/// Meshes read from files, kept for the life of the process keyed by path, size and modification
+/// time: a batch names the same file in every job, and the scene must load it at parse time so a
+/// bad mesh is reported at the line that names it.
+type MeshCache = Mutex<Vec<(PathBuf, u64, Option<std::time::SystemTime>, Arc<Mesh>)>>;
+
+/// Loads (or finds in the process cache) the mesh file at `path`.
+pub fn cached_file_mesh(path: &Path) -> Result<Arc<Mesh>> {
+    static CACHE: OnceLock<MeshCache> = OnceLock::new();
+    let metadata = std::fs::metadata(path).map_err(|source| Error::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let stamp = (metadata.len(), metadata.modified().ok());
+    let cache = CACHE.get_or_init(|| Mutex::new(Vec::new()));
+    if let Ok(entries) = cache.lock() {
+        if let Some(hit) = entries
+            .iter()
+            .find(|(p, len, time, _)| p == path && (*len, *time) == stamp)
+        {
+            return Ok(hit.3.clone());
+        }
+    }
+    let mesh = Arc::new(load_mesh(path)?);
+    if let Ok(mut entries) = cache.lock() {
+        entries.retain(|(p, ..)| p != path);
+        entries.push((path.to_path_buf(), stamp.0, stamp.1, mesh.clone()));
+    }
+    Ok(mesh)
+}
+
+fn mesh_source(node: &Node) -> Result<MeshSource> {
+    let spec = string(node, "mesh")?;
+    if spec.starts_with("builtin:") {
+        return located(&node.at, BuiltinMesh::parse(spec).map(MeshSource::Builtin));
+    }
+    let path = doc::resolve_path(&node.at, spec);
+    located(&node.at, cached_file_mesh(&path))?;
+    Ok(MeshSource::File(path))
+}
+
+/// `material = "file.toml"` or a table: `file` or `preset` to start from, then SPEC keys.
+fn material(node: &Node) -> Result<LacquerMaterial> {
+    if let Value::Str(path) = &node.value {
+        let path = doc::resolve_path(&node.at, path);
+        return located(&node.at, load_material_file(&path));
+    }
+    let mut valid = vec!["file", "preset"];
+    valid.extend_from_slice(MATERIAL_KEYS);
+    let entries = table(node, "the material", &valid)?;
+    let get = |key: &str| entries.iter().find(|e| e.key == key).map(|e| &e.node);
+    let mut material = match (get("file"), get("preset")) {
+        (Some(file), Some(_)) => {
+            return Err(file
+                .at
+                .error("a material starts from `file` or from `preset`, not both"))
+        }
+        (Some(file), None) => {
+            let path = doc::resolve_path(&file.at, string(file, "file")?);
+            located(&file.at, load_material_file(&path))?
+        }
+        (None, Some(preset)) => located(
+            &preset.at,
+            LacquerMaterial::preset(string(preset, "preset")?),
+        )?,
+        (None, None) => LacquerMaterial::default(),
+    };
+    for e in entries
+        .iter()
+        .filter(|e| e.key != "file" && e.key != "preset")
+    {
+        let n = &e.node;
+        let text = match (e.key.as_str(), &n.value) {
+            ("kd", Value::Array(_)) => {
+                let kd = vec3(n, "kd")?;
+                format!("{},{},{}", kd.x, kd.y, kd.z)
+            }
+            ("extrapolate_g", Value::Bool(b)) => b.to_string(),
+            ("fresnel", Value::Str(path)) => {
+                let resolved = doc::resolve_path(&n.at, path);
+                located(&n.at, FresnelTable::from_csv_file(&resolved))?;
+                material.fresnel_file = Some(resolved);
+                continue;
+            }
+            ("kd", _) => {
+                return Err(n
+                    .at
+                    .error(format!("`kd` must be [r, g, b], found {}", show(n))))
+            }
+            ("extrapolate_g", _) | ("fresnel", _) => {
+                return Err(n.at.error(format!(
+                    "`{}` must be {}, found {}",
+                    e.key,
+                    if e.key == "fresnel" {
+                        "a string (a CSV path)"
+                    } else {
+                        "true or false"
+                    },
+                    show(n)
+                )))
+            }
+            (key, _) => number(n, key)?.to_string(),
+        };
+        located(&n.at, material.set(&e.key, &text))?;
+    }
+    located(&node.at, material.validate())?;
+    Ok(material)
+}
+
+/// `[[light]]`: `kind = "dir"` (to_light, irradiance) or `"point"` (position, intensity).
+fn light(node: &Node) -> Result<Light> {
+    let entries = table(node, "[[light]]", LIGHT_KEYS)?;
+    let get = |key: &str| entries.iter().find(|e| e.key == key).map(|e| &e.node);
+    let missing = |key: &str, kind: &str| node.at.error(format!("a {kind} light needs `{key}`"));
+    let colour = |n: &Node, key: &str| match n.value {
+        Value::Array(_) => vec3(n, key),
+        _ => number(n, key).map(DVec3::splat),
+    };
+    let kind = get("kind").map(|n| string(n, "kind")).transpose()?;
+    let light = match kind.unwrap_or("dir") {
+        "dir" | "directional" => {
+            let to = get("to_light").ok_or_else(|| missing("to_light", "dir"))?;
+            let e = get("irradiance").ok_or_else(|| missing("irradiance", "dir"))?;
+            let to_light = vec3(to, "to_light")?;
+            if to_light.length() == 0.0 {
+                return Err(to.at.error("`to_light` must not be the zero vector"));
+            }
+            Light::Directional {
+                to_light: to_light.normalize(),
+                irradiance: colour(e, "irradiance")?,
+            }
+        }
+        "point" => {
+            let p = get("position").ok_or_else(|| missing("position", "point"))?;
+            let i = get("intensity").ok_or_else(|| missing("intensity", "point"))?;
+            Light::Point {
+                position: vec3(p, "position")?,
+                intensity: colour(i, "intensity")?,
+            }
+        }
+        other => {
+            let at = get("kind").map_or(&node.at, |n| &n.at);
+            return Err(at.error(format!(
+                "unknown light kind {other:?}; valid: \"dir\" (to_light, irradiance) or \"point\" \
+                 (position, intensity)"
+            )));
+        }
+    };
+    located(&node.at, light.validate())?;
+    Ok(light)
+}
+
+/// `[environment]` or `environment = "none" | "builtin:studio" | "path.hdr"`.
+fn environment(node: &Node) -> Result<EnvironmentSpec> {
+    let (mut source, mut intensity, mut rotation_deg) = (None, 1.0, 0.0);
+    if let Value::Str(_) = node.value {
+        source = Some(node);
+    } else {
+        for e in table(node, "[environment]", ENVIRONMENT_KEYS)? {
+            match e.key.as_str() {
+                "source" => source = Some(&e.node),
+                "intensity" => intensity = number(&e.node, "intensity")?,
+                _ => rotation_deg = number(&e.node, "rotation_deg")?,
+            }
+        }
+    }
+    if intensity < 0.0 {
+        return Err(node
+            .at
+            .error(format!("`intensity` must be ≥ 0, found {intensity}")));
+    }
+    let Some(source) = source else {
+        return Err(node.at.error(
+            "[environment] needs `source`: \"builtin:studio\", a .hdr/.exr path, or \"none\"",
+        ));
+    };
+    let spec = string(source, "source")?;
+    if spec.eq_ignore_ascii_case("none") {
+        return Ok(EnvironmentSpec::None);
+    }
+    let resolved = if spec.starts_with("builtin:") {
+        if spec != BUILTIN_STUDIO {
+            return Err(source.at.error(format!(
+                "unknown built-in environment {spec:?}; valid: {}",
+                BUILTIN_STUDIO
+            )));
+        }
+        spec.to_string()
+    } else {
+        let path = doc::resolve_path(&source.at, spec);
+        if !path.is_file() {
+            return Err(source.at.error(format!(
+                "environment map {} does not exist (relative paths resolve against the file \
+                 that names them)",
+                path.display()
+            )));
+        }
+        path.display().to_string()
+    };
+    Ok(EnvironmentSpec::Map {
+        source: resolved,
+        intensity,
+        rotation_deg,
+    })
+}
+
+/// `"WxH"`, both whole numbers in 1..=16384.
+fn size_text(node: &Node, s: &str) -> Result<(u32, u32)> {
+    let parsed = s.split_once(['x', 'X']).and_then(|(w, h)| {
+        let w: u32 = w.trim().parse().ok()?;
+        let h: u32 = h.trim().parse().ok()?;
+        ((1..=16384).contains(&w) && (1..=16384).contains(&h)).then_some((w, h))
+    });
+    parsed.ok_or_else(|| {
+        node.at.error(format!(
+            "`size` must be \"WxH\" with whole numbers in 1..=16384, e.g. \"1024x768\"; found {s:?}"
+        ))
+    })
+}
+
+/// `[output]`.
+fn output(node: &Node) -> Result<OutputSpec> {
+    let mut out = OutputSpec::default();
+    for e in table(node, "[output]", OUTPUT_KEYS)? {
+        let n = &e.node;
+        match e.key.as_str() {
+            "size" => {
+                (out.width, out.height) = match &n.value {
+                    Value::Str(s) => size_text(n, s)?,
+                    Value::Array(items) if items.len() == 2 => (
+                        whole(&items[0], "size", 1..=16384)?,
+                        whole(&items[1], "size", 1..=16384)?,
+                    ),
+                    _ => {
+                        return Err(n.at.error(format!(
+                            "`size` must be \"WxH\" or [W, H], found {}",
+                            show(n)
+                        )))
+                    }
+                }
+            }
+            "width" => out.width = whole(n, "width", 1..=16384)?,
+            "height" => out.height = whole(n, "height", 1..=16384)?,
+            "samples" => {
+                out.samples = whole(n, "samples", 1..=4)?;
+                if !SUPPORTED_SAMPLES.contains(&out.samples) {
+                    return Err(n.at.error(format!(
+                        "`samples` must be one of {SUPPORTED_SAMPLES:?}, found {}",
+                        out.samples
+                    )));
+                }
+            }
+            "exposure" => out.exposure_ev = number(n, "exposure")? as f32,
+            "tonemap" => {
+                out.tone_curve = located(&n.at, string(n, "tonemap")?.parse::<ToneCurve>())?
+            }
+            "format" => {
+                format_of(n)?;
+            }
+            _ => {
+                out.background = match &n.value {
+                    Value::Str(s) if s == "env" => Background::Environment,
+                    Value::Str(s) if s == "transparent" => Background::Transparent,
+                    Value::Array(_) => {
+                        let c = vec3(n, "background")?;
+                        if c.min_element() < 0.0 {
+                            return Err(n.at.error("`background` colour components must be ≥ 0"));
+                        }
+                        Background::Color([c.x as f32, c.y as f32, c.z as f32])
+                    }
+                    _ => {
+                        return Err(n.at.error(format!(
+                            "`background` must be \"env\", \"transparent\" or a linear colour \
+                             [r, g, b], found {}",
+                            show(n)
+                        )))
+                    }
+                }
+            }
+        }
+    }
+    Ok(out)
+}
