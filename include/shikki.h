@@ -375,6 +375,27 @@ enum ShikkiStatus shikki_scene_set_display(struct ShikkiScene scene, float expos
 // `width` and `height` are NULL or valid for one write.
 enum ShikkiStatus shikki_scene_get_output(struct ShikkiScene scene, uint32_t *width, uint32_t *height);
 
+// shikki's default scene (`examples/default.toml`: a red and a black smooth lacquer bowl on the
+// built-in studio environment, 1024×1024, 4 samples) — the same as the CLI's.
+//
+// # Safety
+// `out` is valid for one write.
+enum ShikkiStatus shikki_scene_create_default(struct ShikkiScene *out);
+
+// A scene from scene TOML text (the scene-file format). `base_dir` (may be NULL: the current
+// directory) resolves relative mesh, environment and Fresnel paths.
+//
+// # Safety
+// `toml` and `base_dir` (unless NULL) are NUL-terminated UTF-8 strings; `out` is valid for one
+// write.
+enum ShikkiStatus shikki_scene_create_toml(const char *toml, const char *base_dir, struct ShikkiScene *out);
+
+// A scene from a scene TOML file; relative paths resolve against its directory.
+//
+// # Safety
+// `path` is a NUL-terminated UTF-8 string; `out` is valid for one write.
+enum ShikkiStatus shikki_scene_load(const char *path, struct ShikkiScene *out);
+
 #ifdef __cplusplus
 }  // extern "C"
 #endif  // __cplusplus

@@ -33,6 +33,7 @@ mod material;
 mod objects;
 mod renderer;
 mod scene;
+mod scene_toml;
 mod status;
 
 use std::ffi::c_char;

@@ -115,25 +115,37 @@ pub unsafe extern "C" fn shikki_material_set(
 
 /// Beckmann RMS slope m, in (0, 1].
 #[no_mangle]
-pub extern "C" fn shikki_material_set_beckmann_m(material: ShikkiMaterial, value: f64) -> ShikkiStatus {
+pub extern "C" fn shikki_material_set_beckmann_m(
+    material: ShikkiMaterial,
+    value: f64,
+) -> ShikkiStatus {
     ffi_boundary!({ set(material, "m", &value.to_string()) })
 }
 
 /// a of f(N·V) = a + b·N·V.
 #[no_mangle]
-pub extern "C" fn shikki_material_set_diffuse_a(material: ShikkiMaterial, value: f64) -> ShikkiStatus {
+pub extern "C" fn shikki_material_set_diffuse_a(
+    material: ShikkiMaterial,
+    value: f64,
+) -> ShikkiStatus {
     ffi_boundary!({ set(material, "a", &value.to_string()) })
 }
 
 /// b of f(N·V) = a + b·N·V.
 #[no_mangle]
-pub extern "C" fn shikki_material_set_diffuse_b(material: ShikkiMaterial, value: f64) -> ShikkiStatus {
+pub extern "C" fn shikki_material_set_diffuse_b(
+    material: ShikkiMaterial,
+    value: f64,
+) -> ShikkiStatus {
     ffi_boundary!({ set(material, "b", &value.to_string()) })
 }
 
 /// r, the lacquer : colorant ratio, in [1, r*] unless extrapolate_g.
 #[no_mangle]
-pub extern "C" fn shikki_material_set_lacquer_ratio(material: ShikkiMaterial, value: f64) -> ShikkiStatus {
+pub extern "C" fn shikki_material_set_lacquer_ratio(
+    material: ShikkiMaterial,
+    value: f64,
+) -> ShikkiStatus {
     ffi_boundary!({ set(material, "r", &value.to_string()) })
 }
 
@@ -151,19 +163,28 @@ pub extern "C" fn shikki_material_set_ior_b(material: ShikkiMaterial, value: f64
 
 /// β of the environment blur at normal view (> 0).
 #[no_mangle]
-pub extern "C" fn shikki_material_set_beta_normal(material: ShikkiMaterial, value: f64) -> ShikkiStatus {
+pub extern "C" fn shikki_material_set_beta_normal(
+    material: ShikkiMaterial,
+    value: f64,
+) -> ShikkiStatus {
     ffi_boundary!({ set(material, "beta_normal", &value.to_string()) })
 }
 
 /// β of the environment blur at grazing view (> 0).
 #[no_mangle]
-pub extern "C" fn shikki_material_set_beta_grazing(material: ShikkiMaterial, value: f64) -> ShikkiStatus {
+pub extern "C" fn shikki_material_set_beta_grazing(
+    material: ShikkiMaterial,
+    value: f64,
+) -> ShikkiStatus {
     ffi_boundary!({ set(material, "beta_grazing", &value.to_string()) })
 }
 
 /// p of β(nv) = β_grazing + (β_normal − β_grazing)·nv^p (> 0).
 #[no_mangle]
-pub extern "C" fn shikki_material_set_beta_power(material: ShikkiMaterial, value: f64) -> ShikkiStatus {
+pub extern "C" fn shikki_material_set_beta_power(
+    material: ShikkiMaterial,
+    value: f64,
+) -> ShikkiStatus {
     ffi_boundary!({ set(material, "beta_power", &value.to_string()) })
 }
 

@@ -31,8 +31,8 @@ pub struct ShikkiRendererOptions {
     /// Pick the first Vulkan device whose name contains this (case-insensitive); NULL or "" =
     /// the first suitable device.
     pub device_name: *const c_char,
-    /// Enable VK_LAYER_KHRONOS_validation and count its messages
-    /// (`shikki_renderer_validation_message_count`).
+    /// Enable VK_LAYER_KHRONOS_validation (with its synchronisation checks) and count its
+    /// messages (`shikki_renderer_validation_message_count`).
     pub validation: bool,
 }
 
@@ -110,12 +110,14 @@ impl RendererState {
             .iter()
             .map(|o| {
                 if o.transform == glam::DMat4::IDENTITY {
-                    Arc::clone(&o.mesh)
+                    Ok(Arc::clone(&o.mesh))
                 } else {
-                    Arc::new(transform_mesh(&o.mesh, o.transform))
+                    let placed = transform_mesh(&o.mesh, o.transform);
+                    placed.validate()?;
+                    Ok(Arc::new(placed))
                 }
             })
-            .collect();
+            .collect::<FfiResult<Vec<_>>>()?;
         let objects: Vec<DrawObject<'_>> = scene
             .objects
             .iter()
@@ -174,6 +176,7 @@ pub unsafe extern "C" fn shikki_renderer_create(
             ContextOptions {
                 validation: options.validation,
                 device_name: device.filter(|d| !d.is_empty()).map(str::to_string),
+                ..ContextOptions::default()
             }
         };
         let state = RendererState::new(&context)?;
@@ -228,8 +231,8 @@ fn check_len(what: &str, len: usize, width: u32, height: u32, per_pixel: usize) 
         Err(FfiError::new(
             ShikkiStatus::BufferSize,
             format!(
-                "{what} holds {len} elements but the scene renders {width}×{height} pixels: pass \
-                 exactly {needed} ({per_pixel} per pixel; shikki_scene_get_output gives the size)"
+                "{what} holds {len} elements but a {width}×{height} image needs exactly {needed} \
+                 ({per_pixel} per pixel; shikki_scene_get_output gives a scene's size)"
             ),
         ))
     }

@@ -34,6 +34,9 @@ pub enum Command {
     Fit(super::fit::FitArgs),
     /// Generate synthetic goniophotometer measurements from a material.
     Synth(super::fit::SynthArgs),
+    /// Render every job of a jobs file (a base scene plus sweeps): images, manifest.csv and
+    /// contact_sheet.png.
+    Batch(super::scene_cmd::BatchArgs),
 }
 
 /// A preset and `--set` overrides: the material of SPEC §2–3.
@@ -68,6 +71,9 @@ pub struct BrdfArgs {
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
+    /// A scene file (docs/scene.md). With it, `--set PATH=VALUE` overrides scene fields
+    /// (e.g. camera.fov_deg=30, object.0.material.r=2) and the other scene flags are ignored.
+    pub scene: Option<PathBuf>,
     /// Output file: .png (tone-mapped sRGB) or .exr (linear radiance).
     #[arg(short = 'o', long = "output", default_value = "shikki.png")]
     pub output: PathBuf,
@@ -165,6 +171,7 @@ impl Default for RenderArgs {
             }) => args,
             // Unreachable with the static argument list above; keep a usable value anyway.
             _ => RenderArgs {
+                scene: None,
                 output: PathBuf::from("shikki.png"),
                 size: (1024, 1024),
                 material: MaterialArgs {

@@ -4,6 +4,7 @@ use super::args::{
     Backend, BrdfArgs, Cli, Command, EnvironmentArgs, MaterialArgs, PrefilterArgs, RenderArgs,
 };
 use super::directions;
+use super::scene_cmd;
 use crate::compute::BrdfEvaluator;
 use crate::environment::gpu::{GpuEnvironment, GpuPrefilter};
 use crate::environment::load::load_environment;
@@ -22,8 +23,13 @@ use std::io::Write;
 
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        None => render(RenderArgs::default()),
-        Some(Command::Render(args)) => render(args),
+        None => scene_cmd::render_default(&RenderArgs::default()),
+        Some(Command::Render(args)) => match &args.scene {
+            Some(path) => scene_cmd::render_scene_file(path, &args.material.set, &args.output),
+            None if scene_cmd::wants_default_scene(&args) => scene_cmd::render_default(&args),
+            None => render(args),
+        },
+        Some(Command::Batch(args)) => scene_cmd::run_batch(args),
         Some(Command::Brdf(args)) => brdf(args),
         Some(Command::Fresnel(args)) => fresnel(args),
         Some(Command::Info) => info(),

@@ -7,6 +7,7 @@ mod args;
 mod commands;
 mod directions;
 mod fit;
+mod scene_cmd;
 
 use clap::Parser;
 use std::process::ExitCode;

@@ -6,11 +6,8 @@
 //! assets/fonts (its licence is beside it), registered with plotters' ab_glyph backend, so no
 //! system font is needed.
 
-use std::sync::OnceLock;
-
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use plotters::style::{register_font, FontStyle};
 
 use crate::{Error, Result};
 
@@ -19,9 +16,8 @@ pub type PlotResult = std::result::Result<(), Box<dyn std::error::Error>>;
 /// A drawing area on the in-memory bitmap.
 pub type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
 
-const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
-/// The family name the plots ask for.
-pub const FONT_FAMILY: &str = "sans-serif";
+/// The family name the plots ask for (the embedded font of `output::text`).
+pub use crate::output::text::FONT_FAMILY;
 
 /// Colours for boards and channels (Okabe–Ito, readable by colour-blind viewers).
 pub const PALETTE: [RGBColor; 7] = [
@@ -41,28 +37,13 @@ pub const CHANNEL_COLOURS: [RGBColor; 3] = [
     RGBColor(30, 60, 210),
 ];
 
-/// Registers the embedded font once; later calls return the first result.
-fn ensure_font() -> Result<()> {
-    static REGISTERED: OnceLock<std::result::Result<(), String>> = OnceLock::new();
-    REGISTERED
-        .get_or_init(|| {
-            register_font(FONT_FAMILY, FontStyle::Normal, FONT)
-                .map_err(|_| "the embedded DejaVu Sans font did not parse".to_string())
-        })
-        .clone()
-        .map_err(|message| Error::Write {
-            path: "plot".into(),
-            message,
-        })
-}
-
 /// Draws `width` × `height` pixels with `draw` on a white canvas and encodes them as PNG.
 pub fn render_png(
     name: &str,
     (width, height): (u32, u32),
     draw: impl FnOnce(&Area) -> PlotResult,
 ) -> Result<Vec<u8>> {
-    ensure_font()?;
+    crate::output::text::ensure_font()?;
     let failed = |message: String| Error::Write {
         path: name.into(),
         message,

@@ -26,16 +26,22 @@ pub struct ContextOptions {
     pub validation: bool,
     /// Pick the first device whose name contains this (case-insensitive).
     pub device_name: Option<String>,
+    /// With `validation`, also the layer's synchronisation checks (hazards between commands,
+    /// missing barriers); `SHIKKI_SYNC_VALIDATION=1`.
+    pub synchronization_validation: bool,
 }
 
 impl ContextOptions {
-    /// `SHIKKI_VALIDATION=1` turns validation on; `SHIKKI_DEVICE=<substring>` picks the device.
+    /// `SHIKKI_VALIDATION=1` turns validation on (`SHIKKI_SYNC_VALIDATION=1` adds its
+    /// synchronisation checks); `SHIKKI_DEVICE=<substring>` picks the device.
     pub fn from_env() -> Self {
         Self {
             validation: std::env::var("SHIKKI_VALIDATION").is_ok_and(|v| v == "1"),
             device_name: std::env::var("SHIKKI_DEVICE")
                 .ok()
                 .filter(|s| !s.is_empty()),
+            synchronization_validation: std::env::var("SHIKKI_SYNC_VALIDATION")
+                .is_ok_and(|v| v == "1"),
         }
     }
 }
@@ -55,6 +61,7 @@ impl GpuContext {
     pub fn new(options: &ContextOptions) -> Result<Self, GpuError> {
         let shared = Arc::new(DeviceShared::create(
             options.validation,
+            options.synchronization_validation,
             options.device_name.as_deref(),
         )?);
         // SAFETY: the queue family was chosen with one queue; index 0 exists.

@@ -22,9 +22,13 @@ pub(crate) struct DeviceShared {
 }
 
 impl DeviceShared {
-    pub fn create(validation: bool, device_name: Option<&str>) -> Result<Self, GpuError> {
+    pub fn create(
+        validation: bool,
+        synchronization_validation: bool,
+        device_name: Option<&str>,
+    ) -> Result<Self, GpuError> {
         let log = ValidationLog::default();
-        let instance = create_instance(validation, &log)?;
+        let instance = create_instance(validation, synchronization_validation, &log)?;
         // `log` stays alive here until the instance (and its messenger) is gone on every path.
         match create_device(&instance, device_name) {
             Ok((device, adapter, allocator)) => Ok(DeviceShared {

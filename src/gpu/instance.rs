@@ -17,6 +17,7 @@ pub(crate) struct InstanceParts {
 
 pub(crate) fn create_instance(
     validation: bool,
+    synchronization_validation: bool,
     log: &ValidationLog,
 ) -> Result<InstanceParts, GpuError> {
     // SAFETY: loading libvulkan runs its initialisers; we trust the system's Vulkan loader.
@@ -35,12 +36,18 @@ pub(crate) fn create_instance(
     let layers = [VALIDATION_LAYER.as_ptr()];
     let extensions = [ash::ext::debug_utils::NAME.as_ptr()];
     let mut debug_info = messenger_info(log);
+    let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+    let mut features =
+        vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_features);
     let mut create_info = vk::InstanceCreateInfo::default().application_info(&app_info);
     if validation {
         create_info = create_info
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions)
             .push_next(&mut debug_info);
+        if synchronization_validation {
+            create_info = create_info.push_next(&mut features);
+        }
     }
     // SAFETY: create_info and everything it points to live until the call returns.
     let instance =

@@ -15,6 +15,7 @@ pub mod atomic;
 pub mod exr;
 pub mod image;
 pub mod png;
+pub mod text;
 pub mod tonemap;
 
 use std::path::Path;

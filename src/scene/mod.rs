@@ -104,8 +104,9 @@ pub fn load_scene_file(path: &Path) -> Result<Scene> {
 /// The TOML of [`default_scene`]: the same text is shipped as `examples/default.toml`.
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../examples/default.toml");
 
-/// A red (shu) and a black (kuro) smooth lacquer bowl side by side on the built-in studio
-/// environment, which also fills the background: the picture on top of README.md.
+/// A red (shu) and a black (kuro) smooth lacquer bowl side by side on a black lacquer tray, lit
+/// by the built-in studio environment, which also fills the background: the picture on top of
+/// README.md.
 pub fn default_scene() -> Scene {
     match parse_scene_str(DEFAULT_SCENE_TOML, "examples/default.toml", Path::new(".")) {
         Ok(scene) => scene,
@@ -140,12 +141,12 @@ mod tests {
     #[test]
     fn default_scene_is_a_red_and_a_black_bowl_on_the_studio() {
         let scene = parse_scene_str(DEFAULT_SCENE_TOML, "default.toml", Path::new(".")).unwrap();
-        assert_eq!(scene.objects.len(), 2);
+        assert_eq!(scene.objects.len(), 3, "two bowls and the tray");
         let red = LacquerMaterial::preset("smooth-red").unwrap().albedo;
         let black = LacquerMaterial::preset("smooth-black").unwrap().albedo;
         let albedos: Vec<[f64; 3]> = scene.objects.iter().map(|o| o.material.albedo).collect();
         assert!(albedos.contains(&red) && albedos.contains(&black));
-        for object in &scene.objects {
+        for object in &scene.objects[..2] {
             assert!(matches!(
                 object.mesh,
                 MeshSource::Builtin(BuiltinMesh::Bowl)

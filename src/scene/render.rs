@@ -35,6 +35,7 @@ pub struct SceneRenderer {
     environments: Vec<(String, GpuEnvironment)>,
     builtin: HashMap<&'static str, Arc<Mesh>>,
     placed: Vec<(String, Arc<Mesh>)>,
+    prefilter_runs: usize,
     /// Environment warnings (replaced pixels) already printed, so a batch says each once.
     warned: Vec<String>,
 }
@@ -46,6 +47,7 @@ impl SceneRenderer {
             draw: LacquerRenderer::new(),
             prefilter: GpuPrefilter::new(gpu)?,
             environments: Vec::new(),
+            prefilter_runs: 0,
             builtin: HashMap::new(),
             placed: Vec::new(),
             warned: Vec::new(),
@@ -161,6 +163,13 @@ impl SceneRenderer {
             );
             self.warned.push(source.clone());
         }
+        // A fresh prefilter per environment: a second `run` on the same GpuPrefilter trips a
+        // READ_AFTER_WRITE hazard in its compute passes (reported to the environment owner).
+        // Environments are cached, so this costs one pipeline build per distinct environment.
+        if self.prefilter_runs > 0 {
+            self.prefilter = GpuPrefilter::new(gpu)?;
+        }
+        self.prefilter_runs += 1;
         let env = self
             .prefilter
             .run(gpu, &loaded.image, &params, *intensity, *rotation_deg)?;

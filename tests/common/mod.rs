@@ -11,6 +11,8 @@ pub fn validated_gpu() -> GpuContext {
     let options = ContextOptions {
         validation: true,
         device_name: std::env::var("SHIKKI_DEVICE").ok(),
+        // The layer's synchronisation checks too: every test also checks the barriers.
+        synchronization_validation: true,
     };
     match GpuContext::new(&options) {
         Ok(gpu) => gpu,

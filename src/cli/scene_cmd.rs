@@ -1,0 +1,147 @@
+//! `shikki render SCENE.toml`, the default scene, and `shikki batch`: argument handling only; the
+//! scene schema, renderer and batch runner live in `crate::scene`.
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+
+use super::args::RenderArgs;
+use crate::gpu::{ContextOptions, GpuContext};
+use crate::output::{self, OutputFormat, PngSettings};
+use crate::scene::batch::{self, BatchOptions, BatchPlan};
+use crate::scene::{default_scene, Scene, SceneDocument, SceneRenderer};
+use crate::{Error, Result};
+
+#[derive(Debug, Args)]
+pub struct BatchArgs {
+    /// The jobs file: a base scene plus sweeps (docs/scene.md, "Batch").
+    pub jobs: PathBuf,
+    /// Output directory (created if missing) for the images, manifest.csv and contact_sheet.png.
+    #[arg(long, default_value = "batch")]
+    pub out: PathBuf,
+    /// Render only shard I of N: the jobs whose id % N == I (for Slurm arrays, Kubernetes
+    /// indexed Jobs; docs/cluster.md).
+    #[arg(long, value_parser = batch::parse_shard)]
+    pub shard: Option<(usize, usize)>,
+    /// Render every job again, even when its output and manifest hash match.
+    #[arg(long)]
+    pub force: bool,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Whether `shikki render` was given no scene and nothing that describes one (mesh, material,
+/// camera, lights, environment, background): then it renders [`default_scene`]. Output flags
+/// (-o, --size, --samples, --exposure, --tonemap) still apply.
+pub fn wants_default_scene(args: &RenderArgs) -> bool {
+    let d = RenderArgs::default();
+    args.scene.is_none()
+        && args.mesh == d.mesh
+        && args.material.preset == d.material.preset
+        && args.material.set.is_empty()
+        && args.eye.is_none()
+        && args.target.is_none()
+        && args.fov.is_none()
+        && args.lights.is_empty()
+        && args.environment.env == d.environment.env
+        && args.environment.intensity == d.environment.intensity
+        && args.environment.rotation_deg == d.environment.rotation_deg
+        && args.background == d.background
+}
+
+/// The default scene at the size, samples, exposure and tone curve of `args`, to `args.output`.
+pub fn render_default(args: &RenderArgs) -> Result<()> {
+    let mut scene = default_scene();
+    scene.output.width = args.size.0;
+    scene.output.height = args.size.1;
+    scene.output.samples = args.samples;
+    scene.output.exposure_ev = args.exposure;
+    scene.output.tone_curve = args.tonemap;
+    render_to_file(&scene, &args.output)
+}
+
+/// `shikki render SCENE.toml [--set path=value]… [-o FILE]`. `--set` paths are scene paths
+/// (`camera.fov_deg=30`, `object.0.material.r=2`, `material.preset=rough-red` for every object);
+/// with `[output] format = "exr"` and no `-o`, the file is shikki.exr.
+pub fn render_scene_file(scene_path: &Path, sets: &[String], output_path: &Path) -> Result<()> {
+    let mut document = SceneDocument::load(scene_path)?;
+    for assignment in sets {
+        document.set(assignment, Path::new(""))?;
+    }
+    let scene = document.build()?;
+    let format = document.output_format()?;
+    let mut path = output_path.to_path_buf();
+    if format == OutputFormat::Exr && path == Path::new("shikki.png") {
+        path.set_extension("exr");
+    }
+    render_to_file(&scene, &path)
+}
+
+/// Renders `scene` to `path` (format by extension). A failure leaves no file at `path`.
+fn render_to_file(scene: &Scene, path: &Path) -> Result<()> {
+    let result = render_and_write(scene, path);
+    if result.is_err() {
+        if let Ok(true) = output::atomic::discard_stale_output(path) {
+            eprintln!(
+                "removed {} from an earlier run: it is not this run's output",
+                path.display()
+            );
+        }
+    }
+    result
+}
+
+fn render_and_write(scene: &Scene, path: &Path) -> Result<()> {
+    output::preflight_output(path)?;
+    let png = PngSettings {
+        exposure_ev: scene.output.exposure_ev,
+        tone_curve: scene.output.tone_curve,
+    };
+    png.validate()?;
+    let gpu = GpuContext::new(&ContextOptions::from_env())?;
+    let mut renderer = SceneRenderer::new(&gpu)?;
+    let image = renderer.render(&gpu, scene)?;
+    output::write_image(path, &image, &png)?;
+    eprintln!(
+        "wrote {} ({}x{}, {} object(s), {} sample(s) on {})",
+        path.display(),
+        scene.output.width,
+        scene.output.height,
+        scene.objects.len(),
+        scene.output.samples,
+        gpu.info().name
+    );
+    Ok(())
+}
+
+/// `shikki batch`: exit code ≠ 0 if any job failed (after all others ran).
+pub fn run_batch(args: BatchArgs) -> Result<()> {
+    let plan = BatchPlan::load(&args.jobs)?;
+    let shard = args.shard.unwrap_or((0, 1));
+    let gpu = GpuContext::new(&ContextOptions::from_env())?;
+    let options = BatchOptions {
+        out_dir: args.out.clone(),
+        shard,
+        force: args.force,
+        progress: !args.quiet,
+    };
+    let summary = batch::run_batch(&gpu, &plan, &options)?;
+    eprintln!(
+        "batch: {} rendered, {} skipped (already done), {} failed; {} and {}",
+        summary.rendered,
+        summary.skipped,
+        summary.failed,
+        summary.manifest.display(),
+        summary.contact_sheet.display()
+    );
+    if summary.failed > 0 {
+        return Err(Error::invalid(
+            "batch",
+            format!("{} failed job(s)", summary.failed),
+            "each failure is printed above and recorded in the manifest's status column; fix \
+             the jobs file and run the same command again (finished jobs are skipped)",
+        ));
+    }
+    Ok(())
+}
