@@ -110,8 +110,8 @@ typedef struct ShikkiRendererOptions {
   // Pick the first Vulkan device whose name contains this (case-insensitive); NULL or "" =
   // the first suitable device.
   const char *device_name;
-  // Enable VK_LAYER_KHRONOS_validation and count its messages
-  // (`shikki_renderer_validation_message_count`).
+  // Enable VK_LAYER_KHRONOS_validation (with its synchronisation checks) and count its
+  // messages (`shikki_renderer_validation_message_count`).
   bool validation;
 } ShikkiRendererOptions;
 

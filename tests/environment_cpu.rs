@@ -493,7 +493,3 @@ fn truncated_or_foreign_exr_is_a_clear_error() {
     let message = error_text(decode_exr(b"#?RADIANCE\n", "not.exr"));
     assert!(message.contains("not.exr"), "{message}");
 }
-
-fn rayon_threads() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
-}

@@ -89,11 +89,9 @@ fn validate_source(source: &Equirect) -> Result<()> {
     Ok(())
 }
 
-/// Sub-samples per texel side in step 1: the GPU's `SUPERSAMPLE` in
-/// `shaders/common/equirect_to_cube_body.glsl` (change both together).
-
-/// Step 1: texel (f, i, j) is the mean of S × S sub-samples (S = [`equirect_supersample`](super::params::equirect_supersample)) at face
-/// coordinates sc = 2(i + (a + ½)/S)/N − 1, tc = 2(j + (b + ½)/S)/N − 1; each looks along
+/// Step 1: texel (f, i, j) is the mean of S × S sub-samples
+/// (S = [`equirect_supersample`](super::params::equirect_supersample), shared with the GPU's
+/// `shaders/common/equirect_to_cube_body.glsl` through a push constant) at face coordinates sc = 2(i + (a + ½)/S)/N − 1, tc = 2(j + (b + ½)/S)/N − 1; each looks along
 /// normalize(face_direction(f, sc, tc)), turned into the environment's frame, and reads the source
 /// pixel that contains its (u, v): column ⌊u·W⌋ wrapping around, row ⌊v·H⌋ clamped at the poles.
 /// Times `intensity`. A box filter over the texel, so that a source finer than the cube is
