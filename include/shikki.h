@@ -90,17 +90,23 @@ typedef uint32_t ShikkiBackground;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
-// A lacquer material (SPEC §2–4 parameters). Passed by value; 0 is never a valid handle.
+// A lacquer material (SPEC §2–4 parameters). Threads: setters on one material are serialised;
+// `shikki_scene_add_object` copies the material as it is at that moment.
+// Passed by value; 0 is never a valid handle.
 typedef struct ShikkiMaterial {
   uint64_t id;
 } ShikkiMaterial;
 
-// An equirectangular radiance map in memory (CPU side; prefiltered per renderer on use). Passed by value; 0 is never a valid handle.
+// An equirectangular radiance map in memory (CPU side; prefiltered per renderer on use). Threads:
+// immutable once made; any call, from any thread, in parallel.
+// Passed by value; 0 is never a valid handle.
 typedef struct ShikkiEnvironment {
   uint64_t id;
 } ShikkiEnvironment;
 
-// A triangle mesh (positions, normals, u32 indices); immutable once made. Passed by value; 0 is never a valid handle.
+// A triangle mesh (positions, normals, u32 indices). Threads: immutable once made; any call, from
+// any thread, in parallel.
+// Passed by value; 0 is never a valid handle.
 typedef struct ShikkiMesh {
   uint64_t id;
 } ShikkiMesh;
@@ -115,12 +121,19 @@ typedef struct ShikkiRendererOptions {
   bool validation;
 } ShikkiRendererOptions;
 
-// A Vulkan device and the pipelines rendered with it. Passed by value; 0 is never a valid handle.
+// A Vulkan device and the pipelines rendered with it. Threads: calls on one renderer are
+// serialised — it renders one scene at a time and a second caller waits; give each thread its own
+// renderer to render in parallel.
+// Passed by value; 0 is never a valid handle.
 typedef struct ShikkiRenderer {
   uint64_t id;
 } ShikkiRenderer;
 
-// Objects, lights, camera, environment, background and output settings of one picture. Passed by value; 0 is never a valid handle.
+// Objects, lights, camera, environment, background and output settings of one picture. Threads:
+// changes to one scene are serialised; a render works on a snapshot taken when it starts, so a
+// change made during a render affects the next one, and several renderers may render one scene at
+// once.
+// Passed by value; 0 is never a valid handle.
 typedef struct ShikkiScene {
   uint64_t id;
 } ShikkiScene;

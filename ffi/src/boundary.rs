@@ -207,3 +207,33 @@ pub unsafe fn array<T: Copy, const N: usize>(ptr: *const T, name: &str) -> FfiRe
     out.copy_from_slice(items);
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn last_error() -> String {
+        // SAFETY: last_error_ptr points to this thread's NUL-terminated message.
+        unsafe { CStr::from_ptr(last_error_ptr()) }
+            .to_string_lossy()
+            .into_owned()
+    }
+
+    #[test]
+    fn a_panic_becomes_a_status_and_a_message_and_success_clears_it() {
+        let status = run(|| panic!("boom"));
+        assert_eq!(status, ShikkiStatus::Panic);
+        assert!(last_error().contains("boom"));
+        assert_eq!(run(|| Ok(())), ShikkiStatus::Ok);
+        assert_eq!(last_error(), "");
+    }
+
+    #[test]
+    fn null_pointers_are_reported_by_name() {
+        // SAFETY: NULL is allowed by c_str's contract.
+        let result = unsafe { c_str(std::ptr::null(), "path") };
+        let error = result.expect_err("NULL is an error");
+        assert_eq!(error.status, ShikkiStatus::NullArgument);
+        assert!(error.message.contains("`path`"));
+    }
+}

@@ -37,7 +37,10 @@ macro_rules! impl_handle {
     };
 }
 
-/// A Vulkan device and the pipelines rendered with it. Passed by value; 0 is never a valid handle.
+/// A Vulkan device and the pipelines rendered with it. Threads: calls on one renderer are
+/// serialised — it renders one scene at a time and a second caller waits; give each thread its own
+/// renderer to render in parallel.
+/// Passed by value; 0 is never a valid handle.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ShikkiRenderer {
@@ -45,7 +48,9 @@ pub struct ShikkiRenderer {
 }
 impl_handle!(ShikkiRenderer);
 
-/// An equirectangular radiance map in memory (CPU side; prefiltered per renderer on use). Passed by value; 0 is never a valid handle.
+/// An equirectangular radiance map in memory (CPU side; prefiltered per renderer on use). Threads:
+/// immutable once made; any call, from any thread, in parallel.
+/// Passed by value; 0 is never a valid handle.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ShikkiEnvironment {
@@ -53,7 +58,9 @@ pub struct ShikkiEnvironment {
 }
 impl_handle!(ShikkiEnvironment);
 
-/// A triangle mesh (positions, normals, u32 indices); immutable once made. Passed by value; 0 is never a valid handle.
+/// A triangle mesh (positions, normals, u32 indices). Threads: immutable once made; any call, from
+/// any thread, in parallel.
+/// Passed by value; 0 is never a valid handle.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ShikkiMesh {
@@ -61,7 +68,9 @@ pub struct ShikkiMesh {
 }
 impl_handle!(ShikkiMesh);
 
-/// A lacquer material (SPEC §2–4 parameters). Passed by value; 0 is never a valid handle.
+/// A lacquer material (SPEC §2–4 parameters). Threads: setters on one material are serialised;
+/// `shikki_scene_add_object` copies the material as it is at that moment.
+/// Passed by value; 0 is never a valid handle.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ShikkiMaterial {
@@ -69,7 +78,11 @@ pub struct ShikkiMaterial {
 }
 impl_handle!(ShikkiMaterial);
 
-/// Objects, lights, camera, environment, background and output settings of one picture. Passed by value; 0 is never a valid handle.
+/// Objects, lights, camera, environment, background and output settings of one picture. Threads:
+/// changes to one scene are serialised; a render works on a snapshot taken when it starts, so a
+/// change made during a render affects the next one, and several renderers may render one scene at
+/// once.
+/// Passed by value; 0 is never a valid handle.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ShikkiScene {
@@ -218,4 +231,62 @@ pub fn read<H: HandleType, T: Clone + Send + 'static>(handle: H) -> FfiResult<T>
     let object = get::<H, T>(handle)?;
     let guard = lock(&object)?;
     Ok(guard.clone())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The table is global: these tests take turns so that one's inserts cannot take the slot
+    /// the other expects to be reused.
+    static SERIAL: Mutex<()> = Mutex::new(());
+
+    fn status_of<T>(result: FfiResult<T>) -> Option<ShikkiStatus> {
+        result.err().map(|e| e.status)
+    }
+
+    #[test]
+    fn a_destroyed_handle_stays_invalid_after_its_slot_is_reused() {
+        let _turn = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+        let first: ShikkiMaterial = insert(1_u32);
+        remove(first).expect("first destroy succeeds");
+        // The freed slot is taken again; only the generation tells the two handles apart.
+        let second: ShikkiMaterial = insert(2_u32);
+        assert_eq!(
+            first.id & 0xffff_ffff,
+            second.id & 0xffff_ffff,
+            "slot reused"
+        );
+        assert_ne!(first.id, second.id);
+        assert_eq!(
+            status_of(get::<_, u32>(first)),
+            Some(ShikkiStatus::InvalidHandle)
+        );
+        assert_eq!(status_of(remove(first)), Some(ShikkiStatus::InvalidHandle));
+        assert_eq!(read::<_, u32>(second).ok(), Some(2));
+        remove(second).expect("second destroy succeeds");
+    }
+
+    #[test]
+    fn zero_forged_and_wrong_kind_handles_are_rejected() {
+        let _turn = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+        let mesh: ShikkiMesh = insert(5_u8);
+        let as_scene = ShikkiScene { id: mesh.id };
+        let message = get::<_, u8>(as_scene).err().map(|e| e.message);
+        assert!(message.is_some_and(|m| m.contains("is a ShikkiMesh handle")));
+        let forged = ShikkiMesh {
+            id: u64::from(u32::MAX) << 32 | 0x7fff_ffff,
+        };
+        assert_eq!(
+            status_of(get::<_, u8>(forged)),
+            Some(ShikkiStatus::InvalidHandle)
+        );
+        assert_eq!(
+            status_of(get::<_, u8>(ShikkiMesh { id: 0 })),
+            Some(ShikkiStatus::InvalidHandle)
+        );
+        // Destroying "no object" is a no-op, like free(NULL).
+        assert!(remove(ShikkiMesh { id: 0 }).is_ok());
+        remove(mesh).expect("destroy succeeds");
+    }
 }

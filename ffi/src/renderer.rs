@@ -11,7 +11,6 @@ use shikki::environment::gpu::{GpuEnvironment, GpuPrefilter};
 use shikki::environment::params::ViewBlur;
 use shikki::environment::{Equirect, PrefilterParams};
 use shikki::gpu::{ContextOptions, GpuContext};
-use shikki::output::tonemap::to_srgb8;
 use shikki::output::{self, HdrImage, PngSettings};
 use shikki::raster::draw::{DrawObject, DrawScene, LacquerRenderer, RenderSettings};
 use shikki::raster::mesh_io::transform_mesh;
@@ -286,24 +285,10 @@ pub unsafe extern "C" fn shikki_render_rgba8(
             tone_curve: scene.tone_curve,
         };
         for (dst, src) in out.chunks_exact_mut(4).zip(&image.pixels) {
-            dst.copy_from_slice(&straight_srgb8(*src, &settings));
+            dst.copy_from_slice(&shikki::output::png::straight_srgb8(*src, &settings));
         }
         Ok(())
     })
-}
-
-/// The PNG encoder's pixel rule (output/png.rs): colour un-premultiplied by coverage, then
-/// exposure → tone curve → sRGB → 8 bits; alpha rounded to 8 bits.
-fn straight_srgb8(pixel: [f32; 4], settings: &PngSettings) -> [u8; 4] {
-    let [r, g, b, a] = pixel;
-    let alpha = a.clamp(0.0, 1.0);
-    let unpremultiply = if alpha > 0.0 { 1.0 / alpha } else { 1.0 };
-    [
-        to_srgb8(r * unpremultiply, settings),
-        to_srgb8(g * unpremultiply, settings),
-        to_srgb8(b * unpremultiply, settings),
-        (alpha * 255.0).round() as u8,
-    ]
 }
 
 /// Renders and writes `path`: `.png` (the scene's exposure and tone curve) or `.exr` (linear).

@@ -10,6 +10,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use shikki::gpu::{ContextOptions, GpuContext};
@@ -24,22 +25,37 @@ fn repo_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// target/<profile>: the test binary lives in target/<profile>/deps.
+/// target/<profile> (the test binary lives in target/<profile>/deps), with libshikki.so and
+/// libshikki.a freshly built: `cargo test` builds only what tests link (the crate has no rlib),
+/// so the C libraries are built here by a nested `cargo build`, once per test binary. Cargo has
+/// released the target directory's lock by the time tests run.
 fn library_dir() -> PathBuf {
-    let exe = std::env::current_exe().expect("test executable path");
-    let dir = exe
-        .parent()
-        .and_then(Path::parent)
-        .expect("target/<profile>/deps/<test>")
-        .to_path_buf();
-    for lib in ["libshikki.so", "libshikki.a"] {
-        assert!(
-            dir.join(lib).is_file(),
-            "{} is missing; `cargo test -p shikki-ffi` builds it",
-            dir.join(lib).display()
-        );
-    }
-    dir
+    static BUILT: OnceLock<PathBuf> = OnceLock::new();
+    BUILT
+        .get_or_init(|| {
+            let exe = std::env::current_exe().expect("test executable path");
+            let dir = exe
+                .parent()
+                .and_then(Path::parent)
+                .expect("target/<profile>/deps/<test>")
+                .to_path_buf();
+            let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+            let mut build = Command::new(cargo);
+            build.args(["build", "-p", "shikki-ffi", "--lib"]);
+            if dir.file_name().is_some_and(|name| name == "release") {
+                build.arg("--release");
+            }
+            assert_success("cargo build -p shikki-ffi --lib", &run(&mut build));
+            for lib in ["libshikki.so", "libshikki.a"] {
+                assert!(
+                    dir.join(lib).is_file(),
+                    "{} is missing",
+                    dir.join(lib).display()
+                );
+            }
+            dir
+        })
+        .clone()
 }
 
 fn run(command: &mut Command) -> Output {
@@ -65,18 +81,24 @@ fn assert_success(what: &str, output: &Output) {
     );
 }
 
-/// The C programs, built once per test into a temporary directory.
+/// The C programs, built once per test binary into target/<profile>/c-api.
 struct Programs {
-    _dir: tempfile::TempDir,
     out: PathBuf,
 }
 
 impl Programs {
+    fn get() -> &'static Programs {
+        static PROGRAMS: OnceLock<Programs> = OnceLock::new();
+        PROGRAMS.get_or_init(Programs::build)
+    }
+
     fn build() -> Self {
         let root = repo_root();
         let libs = library_dir();
-        let dir = tempfile::tempdir().expect("temporary directory");
-        let out = dir.path().to_path_buf();
+        let out = libs.join("c-api");
+        // Stale programs or images from an earlier run must not pass for this run's.
+        let _ = std::fs::remove_dir_all(&out);
+        std::fs::create_dir_all(&out).expect("create target/<profile>/c-api");
         let make = run(Command::new("make")
             .arg("-C")
             .arg(root.join("examples/c"))
@@ -117,7 +139,7 @@ impl Programs {
                 "-lc",
             ]);
         assert_success("cc error_paths.c (static)", &run(&mut fixed));
-        Programs { _dir: dir, out }
+        Programs { out }
     }
 
     fn command(&self, program: &str) -> Command {
@@ -147,7 +169,7 @@ fn rust_png() -> Vec<u8> {
 
 #[test]
 fn c_example_png_equals_the_rust_api_png_shared_and_static() {
-    let programs = Programs::build();
+    let programs = Programs::get();
     let expected = rust_png();
     for program in ["render_bowl", "render_bowl_static"] {
         let png = programs.out.join(format!("{program}.png"));
@@ -158,6 +180,10 @@ fn c_example_png_equals_the_rust_api_png_shared_and_static() {
             let keep = repo_root().join(format!("target/test-output/{program}-actual.png"));
             let _ = std::fs::create_dir_all(keep.parent().unwrap_or(Path::new(".")));
             let _ = std::fs::write(&keep, &actual);
+            let _ = std::fs::write(
+                keep.with_file_name(format!("{program}-expected.png")),
+                &expected,
+            );
             panic!(
                 "{program}'s PNG ({} bytes) differs from the Rust API's ({} bytes); kept at {}",
                 actual.len(),
@@ -170,7 +196,7 @@ fn c_example_png_equals_the_rust_api_png_shared_and_static() {
 
 #[test]
 fn c_error_paths_return_their_status_and_a_message_shared_and_static() {
-    let programs = Programs::build();
+    let programs = Programs::get();
     for program in ["error_paths", "error_paths_static"] {
         let output = run(&mut programs.command(program));
         assert_success(program, &output);
@@ -198,7 +224,7 @@ fn c_programs_are_valgrind_clean() {
         eprintln!("valgrind is not installed (scripts/setup installs it); skipping");
         return;
     }
-    let programs = Programs::build();
+    let programs = Programs::get();
     let suppressions = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/valgrind.supp");
     let valgrind = |args: &[&str]| {
         let mut command = Command::new("valgrind");
@@ -210,6 +236,8 @@ fn c_programs_are_valgrind_clean() {
                 "--error-exitcode=1",
                 "--errors-for-leak-kinds=definite,indirect,possible",
                 "--keep-debuginfo=yes",
+                // Deep enough that a suppressed driver stack is seen whole.
+                "--num-callers=40",
             ])
             .arg(format!("--suppressions={}", suppressions.display()))
             .args(args);

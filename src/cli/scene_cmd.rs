@@ -65,6 +65,22 @@ pub fn render_default(args: &RenderArgs) -> Result<()> {
 /// (`camera.fov_deg=30`, `object.0.material.r=2`, `material.preset=rough-red` for every object);
 /// with `[output] format = "exr"` and no `-o`, the file is shikki.exr.
 pub fn render_scene_file(scene_path: &Path, sets: &[String], output_path: &Path) -> Result<()> {
+    let result = scene_and_path(scene_path, sets, output_path)
+        .and_then(|(scene, path)| render_to_file(&scene, &path));
+    if result.is_err() {
+        // The scene may have failed before its output path (and format) was known.
+        for path in [output_path.to_path_buf(), output_path.with_extension("exr")] {
+            discard_stale(&path);
+        }
+    }
+    result
+}
+
+fn scene_and_path(
+    scene_path: &Path,
+    sets: &[String],
+    output_path: &Path,
+) -> Result<(Scene, PathBuf)> {
     let mut document = SceneDocument::load(scene_path)?;
     for assignment in sets {
         document.set(assignment, Path::new(""))?;
@@ -75,21 +91,25 @@ pub fn render_scene_file(scene_path: &Path, sets: &[String], output_path: &Path)
     if format == OutputFormat::Exr && path == Path::new("shikki.png") {
         path.set_extension("exr");
     }
-    render_to_file(&scene, &path)
+    Ok((scene, path))
 }
 
 /// Renders `scene` to `path` (format by extension). A failure leaves no file at `path`.
 fn render_to_file(scene: &Scene, path: &Path) -> Result<()> {
     let result = render_and_write(scene, path);
     if result.is_err() {
-        if let Ok(true) = output::atomic::discard_stale_output(path) {
-            eprintln!(
-                "removed {} from an earlier run: it is not this run's output",
-                path.display()
-            );
-        }
+        discard_stale(path);
     }
     result
+}
+
+fn discard_stale(path: &Path) {
+    if let Ok(true) = output::atomic::discard_stale_output(path) {
+        eprintln!(
+            "removed {} from an earlier run: it is not this run's output",
+            path.display()
+        );
+    }
 }
 
 fn render_and_write(scene: &Scene, path: &Path) -> Result<()> {

@@ -46,8 +46,9 @@ pub fn encode_png(image: &HdrImage, settings: &PngSettings) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
-/// One premultiplied linear pixel → straight-alpha sRGB8.
-fn straight_srgb8(pixel: [f32; 4], settings: &PngSettings) -> [u8; 4] {
+/// One pixel as PNG stores it: colour un-premultiplied by coverage, then exposure → tone curve →
+/// sRGB → 8 bits; alpha rounded to 8 bits. Also the C API's RGBA8 render.
+pub fn straight_srgb8(pixel: [f32; 4], settings: &PngSettings) -> [u8; 4] {
     let [r, g, b, a] = pixel;
     let alpha = a.clamp(0.0, 1.0);
     // Premultiplied colour is radiance × coverage; dividing by coverage recovers the radiance of

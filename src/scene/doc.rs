@@ -22,8 +22,13 @@ pub enum Origin {
         column: usize,
         base_dir: Arc<Path>,
     },
-    /// A command-line `--set` or a batch sweep; `what` names it, e.g. `--set camera.fov_deg`.
-    Override { what: Arc<str>, base_dir: Arc<Path> },
+    /// A command-line `--set`; `what` names it (`--set camera.fov_deg`), `text` is the value
+    /// as typed.
+    Override {
+        what: Arc<str>,
+        text: Arc<str>,
+        base_dir: Arc<Path>,
+    },
 }
 
 impl Origin {
@@ -47,7 +52,9 @@ impl Origin {
                 *line,
                 format!("column {column}: {message}"),
             ),
-            Origin::Override { what, .. } => Error::invalid(what.as_ref(), "", message.to_string()),
+            Origin::Override { what, text, .. } => {
+                Error::invalid(what.as_ref(), text.as_ref(), message.to_string())
+            }
         }
     }
 
@@ -227,6 +234,7 @@ fn parse_toml_float(text: &str) -> f64 {
 pub fn parse_override_value(text: &str, what: &str, base_dir: &Path) -> Node {
     let at = Origin::Override {
         what: Arc::from(what),
+        text: Arc::from(text.trim()),
         base_dir: Arc::from(base_dir),
     };
     let parsed = parse_document(&format!("v = {text}"), what, base_dir)
@@ -310,6 +318,12 @@ pub fn set_path(root: &mut Node, path: &str, value: Node) -> Result<()> {
         }
         let at = current.at.clone();
         current = match &mut current.value {
+            Value::Table(_) if segment.parse::<usize>().is_ok() => {
+                return Err(value.at.error(format!(
+                    "`{path}`: `{parent_key}` is not an array (write [[{parent_key}]] in the \
+                     scene file to have element {segment})"
+                )))
+            }
             Value::Table(entries) => {
                 let index = match entries.iter().position(|e| e.key == *segment) {
                     Some(index) => index,

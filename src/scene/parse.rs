@@ -512,7 +512,14 @@ fn material(node: &Node) -> Result<LacquerMaterial> {
         };
         located(&n.at, material.set(&e.key, &text))?;
     }
-    located(&node.at, material.validate())?;
+    // A rule tying fields together points at the failing field if this table set it.
+    material.validate().map_err(|e| {
+        let field = match &e {
+            Error::InvalidParameter { field, .. } => field.as_str(),
+            _ => "",
+        };
+        get(field).map_or(&node.at, |n| &n.at).error(e)
+    })?;
     Ok(material)
 }
 
