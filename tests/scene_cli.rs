@@ -35,9 +35,10 @@ fn scene_file_with_set_overrides_renders_what_the_overrides_say() {
     assert_eq!((image.width, image.height), (40, 24));
     assert_eq!(image.get(0, 0), [0.0; 4]);
     assert_eq!(image.get(20, 12)[3], 1.0);
-    // Only the light towards (1, 1, 1) is left on, so the lower-left of the sphere (facing
-    // away from it, towards (-1, -1, ·)) gets no light at all: radiance exactly 0 there.
-    let shadowed = image.get(15, 15);
+    // Only the light towards (1, 1, 1) is left on. Pixel (14, 16)'s ray hits the sphere at
+    // ≈ (-0.550, -0.450, 0.704) (hand ray-cast: fov 40°, aspect 40/24, eye at z = 4), where
+    // N·L ≈ -0.17 < 0: no light at all, radiance exactly 0. With the second light on it is lit.
+    let shadowed = image.get(14, 16);
     assert_eq!(shadowed[3], 1.0);
     assert_eq!(shadowed[..3], [0.0; 3], "{shadowed:?}");
 }

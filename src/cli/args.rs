@@ -18,6 +18,8 @@ pub struct Cli {
     pub command: Option<Command>,
 }
 
+// Parsed once per process: the size of the largest variant (render's many flags) costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Render a mesh with the lacquer BRDF to PNG or EXR (the default command).
@@ -45,6 +47,10 @@ pub struct MaterialArgs {
     /// Material preset: smooth, rough, smooth-black, smooth-red, rough-black, rough-red.
     #[arg(long, default_value = "smooth-red")]
     pub preset: String,
+    /// A material file (TOML, docs/measurements.md; e.g. written by `shikki fit`); replaces
+    /// --preset, and --set still applies on top.
+    #[arg(long)]
+    pub material: Option<PathBuf>,
     /// Override a material field by its SPEC name: m, a, b, c0, c1, c2, r, kd=r,g,b,
     /// fresnel=PATH.csv, ior_a, ior_b, extrapolate_g=true, beta_normal, beta_grazing, beta_power.
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -176,6 +182,7 @@ impl Default for RenderArgs {
                 size: (1024, 1024),
                 material: MaterialArgs {
                     preset: "smooth-red".into(),
+                    material: None,
                     set: Vec::new(),
                 },
                 mesh: "builtin:sphere".into(),

@@ -41,7 +41,10 @@ pub fn run(cli: Cli) -> Result<()> {
 
 /// The preset, then every `--set KEY=VALUE` in order, then full validation.
 pub fn build_material(args: &MaterialArgs) -> Result<LacquerMaterial> {
-    let mut material = LacquerMaterial::preset(&args.preset)?;
+    let mut material = match &args.material {
+        Some(path) => crate::model::material_file::load_material_file(path)?,
+        None => LacquerMaterial::preset(&args.preset)?,
+    };
     for assignment in &args.set {
         let (key, value) = assignment.split_once('=').ok_or_else(|| {
             Error::invalid(

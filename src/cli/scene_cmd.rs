@@ -31,14 +31,15 @@ pub struct BatchArgs {
     pub quiet: bool,
 }
 
-/// Whether `shikki render` was given no scene and nothing that describes one (mesh, material,
-/// camera, lights, environment, background): then it renders [`default_scene`]. Output flags
+/// Whether `shikki render` was given no scene and nothing that describes one (mesh, preset,
+/// material file, camera, lights, environment, background): then it renders [`default_scene`]. Output flags
 /// (-o, --size, --samples, --exposure, --tonemap) still apply.
 pub fn wants_default_scene(args: &RenderArgs) -> bool {
     let d = RenderArgs::default();
     args.scene.is_none()
         && args.mesh == d.mesh
         && args.material.preset == d.material.preset
+        && args.material.material.is_none()
         && args.material.set.is_empty()
         && args.eye.is_none()
         && args.target.is_none()

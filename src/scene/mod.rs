@@ -9,6 +9,7 @@ pub mod batch;
 pub mod doc;
 pub mod parse;
 pub mod render;
+mod sections;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

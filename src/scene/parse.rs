@@ -11,15 +11,15 @@ use std::sync::{Arc, Mutex, OnceLock};
 use glam::{DMat4, DQuat, DVec3, EulerRot};
 
 use super::doc::{self, Entry, Node, Origin, Value};
+use super::sections::{environment, light, output};
 use super::{EnvironmentSpec, MeshSource, OutputSpec, Scene, SceneObject};
 use crate::environment::load::BUILTIN_STUDIO;
 use crate::model::fresnel::FresnelTable;
 use crate::model::material::MATERIAL_KEYS;
 use crate::model::material_file::load_material_file;
 use crate::model::LacquerMaterial;
-use crate::output::{OutputFormat, ToneCurve};
-use crate::raster::draw::{Background, SUPPORTED_SAMPLES};
-use crate::raster::lights::{default_lights, Light, MAX_LIGHTS};
+use crate::output::OutputFormat;
+use crate::raster::lights::{default_lights, MAX_LIGHTS};
 use crate::raster::mesh::{BuiltinMesh, Mesh};
 use crate::raster::mesh_io::load_mesh;
 use crate::raster::Camera;
@@ -35,9 +35,9 @@ const OBJECT_KEYS: &[&str] = &[
     "transform",
     "material",
 ];
-const LIGHT_KEYS: &[&str] = &["kind", "to_light", "irradiance", "position", "intensity"];
-const ENVIRONMENT_KEYS: &[&str] = &["source", "intensity", "rotation_deg"];
-const OUTPUT_KEYS: &[&str] = &[
+pub(super) const LIGHT_KEYS: &[&str] = &["kind", "to_light", "irradiance", "position", "intensity"];
+pub(super) const ENVIRONMENT_KEYS: &[&str] = &["source", "intensity", "rotation_deg"];
+pub(super) const OUTPUT_KEYS: &[&str] = &[
     "size",
     "width",
     "height",
@@ -121,7 +121,7 @@ impl SceneDocument {
     }
 }
 
-fn format_of(node: &Node) -> Result<OutputFormat> {
+pub(super) fn format_of(node: &Node) -> Result<OutputFormat> {
     match &node.value {
         Value::Str(s) if s.eq_ignore_ascii_case("png") => Ok(OutputFormat::Png),
         Value::Str(s) if s.eq_ignore_ascii_case("exr") => Ok(OutputFormat::Exr),
@@ -142,7 +142,7 @@ pub fn table_get<'a>(node: &'a Node, key: &str) -> Option<&'a Node> {
 }
 
 /// Checks `node` is a table with only `valid` keys and returns its entries.
-fn table<'a>(node: &'a Node, section: &str, valid: &[&str]) -> Result<&'a [Entry]> {
+pub(super) fn table<'a>(node: &'a Node, section: &str, valid: &[&str]) -> Result<&'a [Entry]> {
     match &node.value {
         Value::Table(entries) => {
             if let Some(bad) = entries.iter().find(|e| !valid.contains(&e.key.as_str())) {
@@ -157,11 +157,11 @@ fn table<'a>(node: &'a Node, section: &str, valid: &[&str]) -> Result<&'a [Entry
     }
 }
 
-fn show(node: &Node) -> String {
+pub(super) fn show(node: &Node) -> String {
     format!("{} `{}`", node.value.type_name(), node.value.to_text())
 }
 
-fn number(node: &Node, key: &str) -> Result<f64> {
+pub(super) fn number(node: &Node, key: &str) -> Result<f64> {
     let x = match node.value {
         Value::Integer(i) => i as f64,
         Value::Float(f) => f,
@@ -177,7 +177,7 @@ fn number(node: &Node, key: &str) -> Result<f64> {
     Ok(x)
 }
 
-fn vec3(node: &Node, key: &str) -> Result<DVec3> {
+pub(super) fn vec3(node: &Node, key: &str) -> Result<DVec3> {
     let wrong = || {
         node.at.error(format!(
             "`{key}` must be an array of three numbers [x, y, z], found {}",
@@ -196,7 +196,7 @@ fn vec3(node: &Node, key: &str) -> Result<DVec3> {
     }
 }
 
-fn string<'a>(node: &'a Node, key: &str) -> Result<&'a str> {
+pub(super) fn string<'a>(node: &'a Node, key: &str) -> Result<&'a str> {
     match &node.value {
         Value::Str(s) => Ok(s),
         _ => Err(node
@@ -205,7 +205,7 @@ fn string<'a>(node: &'a Node, key: &str) -> Result<&'a str> {
     }
 }
 
-fn whole(node: &Node, key: &str, range: std::ops::RangeInclusive<u32>) -> Result<u32> {
+pub(super) fn whole(node: &Node, key: &str, range: std::ops::RangeInclusive<u32>) -> Result<u32> {
     match node.value {
         Value::Integer(i) if i >= i64::from(*range.start()) && i <= i64::from(*range.end()) => {
             Ok(i as u32)
@@ -220,7 +220,7 @@ fn whole(node: &Node, key: &str, range: std::ops::RangeInclusive<u32>) -> Result
 }
 
 /// Wraps an owner's validation error with where the value was written.
-fn located<T>(at: &Origin, result: Result<T>) -> Result<T> {
+pub(super) fn located<T>(at: &Origin, result: Result<T>) -> Result<T> {
     result.map_err(|e| at.error(e))
 }
 
@@ -521,179 +521,4 @@ fn material(node: &Node) -> Result<LacquerMaterial> {
         get(field).map_or(&node.at, |n| &n.at).error(e)
     })?;
     Ok(material)
-}
-
-/// `[[light]]`: `kind = "dir"` (to_light, irradiance) or `"point"` (position, intensity).
-fn light(node: &Node) -> Result<Light> {
-    let entries = table(node, "[[light]]", LIGHT_KEYS)?;
-    let get = |key: &str| entries.iter().find(|e| e.key == key).map(|e| &e.node);
-    let missing = |key: &str, kind: &str| node.at.error(format!("a {kind} light needs `{key}`"));
-    let colour = |n: &Node, key: &str| match n.value {
-        Value::Array(_) => vec3(n, key),
-        _ => number(n, key).map(DVec3::splat),
-    };
-    let kind = get("kind").map(|n| string(n, "kind")).transpose()?;
-    let light = match kind.unwrap_or("dir") {
-        "dir" | "directional" => {
-            let to = get("to_light").ok_or_else(|| missing("to_light", "dir"))?;
-            let e = get("irradiance").ok_or_else(|| missing("irradiance", "dir"))?;
-            let to_light = vec3(to, "to_light")?;
-            if to_light.length() == 0.0 {
-                return Err(to.at.error("`to_light` must not be the zero vector"));
-            }
-            Light::Directional {
-                to_light: to_light.normalize(),
-                irradiance: colour(e, "irradiance")?,
-            }
-        }
-        "point" => {
-            let p = get("position").ok_or_else(|| missing("position", "point"))?;
-            let i = get("intensity").ok_or_else(|| missing("intensity", "point"))?;
-            Light::Point {
-                position: vec3(p, "position")?,
-                intensity: colour(i, "intensity")?,
-            }
-        }
-        other => {
-            let at = get("kind").map_or(&node.at, |n| &n.at);
-            return Err(at.error(format!(
-                "unknown light kind {other:?}; valid: \"dir\" (to_light, irradiance) or \"point\" \
-                 (position, intensity)"
-            )));
-        }
-    };
-    located(&node.at, light.validate())?;
-    Ok(light)
-}
-
-/// `[environment]` or `environment = "none" | "builtin:studio" | "path.hdr"`.
-fn environment(node: &Node) -> Result<EnvironmentSpec> {
-    let (mut source, mut intensity, mut rotation_deg) = (None, 1.0, 0.0);
-    if let Value::Str(_) = node.value {
-        source = Some(node);
-    } else {
-        for e in table(node, "[environment]", ENVIRONMENT_KEYS)? {
-            match e.key.as_str() {
-                "source" => source = Some(&e.node),
-                "intensity" => intensity = number(&e.node, "intensity")?,
-                _ => rotation_deg = number(&e.node, "rotation_deg")?,
-            }
-        }
-    }
-    if intensity < 0.0 {
-        return Err(node
-            .at
-            .error(format!("`intensity` must be ≥ 0, found {intensity}")));
-    }
-    let Some(source) = source else {
-        return Err(node.at.error(
-            "[environment] needs `source`: \"builtin:studio\", a .hdr/.exr path, or \"none\"",
-        ));
-    };
-    let spec = string(source, "source")?;
-    if spec.eq_ignore_ascii_case("none") {
-        return Ok(EnvironmentSpec::None);
-    }
-    let resolved = if spec.starts_with("builtin:") {
-        if spec != BUILTIN_STUDIO {
-            return Err(source.at.error(format!(
-                "unknown built-in environment {spec:?}; valid: {}",
-                BUILTIN_STUDIO
-            )));
-        }
-        spec.to_string()
-    } else {
-        let path = doc::resolve_path(&source.at, spec);
-        if !path.is_file() {
-            return Err(source.at.error(format!(
-                "environment map {} does not exist (relative paths resolve against the file \
-                 that names them)",
-                path.display()
-            )));
-        }
-        path.display().to_string()
-    };
-    Ok(EnvironmentSpec::Map {
-        source: resolved,
-        intensity,
-        rotation_deg,
-    })
-}
-
-/// `"WxH"`, both whole numbers in 1..=16384.
-fn size_text(node: &Node, s: &str) -> Result<(u32, u32)> {
-    let parsed = s.split_once(['x', 'X']).and_then(|(w, h)| {
-        let w: u32 = w.trim().parse().ok()?;
-        let h: u32 = h.trim().parse().ok()?;
-        ((1..=16384).contains(&w) && (1..=16384).contains(&h)).then_some((w, h))
-    });
-    parsed.ok_or_else(|| {
-        node.at.error(format!(
-            "`size` must be \"WxH\" with whole numbers in 1..=16384, e.g. \"1024x768\"; found {s:?}"
-        ))
-    })
-}
-
-/// `[output]`.
-fn output(node: &Node) -> Result<OutputSpec> {
-    let mut out = OutputSpec::default();
-    for e in table(node, "[output]", OUTPUT_KEYS)? {
-        let n = &e.node;
-        match e.key.as_str() {
-            "size" => {
-                (out.width, out.height) = match &n.value {
-                    Value::Str(s) => size_text(n, s)?,
-                    Value::Array(items) if items.len() == 2 => (
-                        whole(&items[0], "size", 1..=16384)?,
-                        whole(&items[1], "size", 1..=16384)?,
-                    ),
-                    _ => {
-                        return Err(n.at.error(format!(
-                            "`size` must be \"WxH\" or [W, H], found {}",
-                            show(n)
-                        )))
-                    }
-                }
-            }
-            "width" => out.width = whole(n, "width", 1..=16384)?,
-            "height" => out.height = whole(n, "height", 1..=16384)?,
-            "samples" => {
-                out.samples = whole(n, "samples", 1..=4)?;
-                if !SUPPORTED_SAMPLES.contains(&out.samples) {
-                    return Err(n.at.error(format!(
-                        "`samples` must be one of {SUPPORTED_SAMPLES:?}, found {}",
-                        out.samples
-                    )));
-                }
-            }
-            "exposure" => out.exposure_ev = number(n, "exposure")? as f32,
-            "tonemap" => {
-                out.tone_curve = located(&n.at, string(n, "tonemap")?.parse::<ToneCurve>())?
-            }
-            "format" => {
-                format_of(n)?;
-            }
-            _ => {
-                out.background = match &n.value {
-                    Value::Str(s) if s == "env" => Background::Environment,
-                    Value::Str(s) if s == "transparent" => Background::Transparent,
-                    Value::Array(_) => {
-                        let c = vec3(n, "background")?;
-                        if c.min_element() < 0.0 {
-                            return Err(n.at.error("`background` colour components must be ≥ 0"));
-                        }
-                        Background::Color([c.x as f32, c.y as f32, c.z as f32])
-                    }
-                    _ => {
-                        return Err(n.at.error(format!(
-                            "`background` must be \"env\", \"transparent\" or a linear colour \
-                             [r, g, b], found {}",
-                            show(n)
-                        )))
-                    }
-                }
-            }
-        }
-    }
-    Ok(out)
 }

@@ -1,0 +1,191 @@
+//! The scene sections that hold no meshes or materials: `[[light]]`, `[environment]` and
+//! `[output]` (docs/scene.md). Split from [`super::parse`], whose helpers and rules they share.
+
+use glam::DVec3;
+
+use super::doc::{self, Node, Value};
+use super::parse::{
+    format_of, located, number, show, string, table, vec3, whole, ENVIRONMENT_KEYS, LIGHT_KEYS,
+    OUTPUT_KEYS,
+};
+use super::{EnvironmentSpec, OutputSpec};
+use crate::environment::load::BUILTIN_STUDIO;
+use crate::output::ToneCurve;
+use crate::raster::draw::{Background, SUPPORTED_SAMPLES};
+use crate::raster::lights::Light;
+use crate::Result;
+
+/// `[[light]]`: `kind = "dir"` (to_light, irradiance) or `"point"` (position, intensity).
+pub(super) fn light(node: &Node) -> Result<Light> {
+    let entries = table(node, "[[light]]", LIGHT_KEYS)?;
+    let get = |key: &str| entries.iter().find(|e| e.key == key).map(|e| &e.node);
+    let missing = |key: &str, kind: &str| node.at.error(format!("a {kind} light needs `{key}`"));
+    let colour = |n: &Node, key: &str| match n.value {
+        Value::Array(_) => vec3(n, key),
+        _ => number(n, key).map(DVec3::splat),
+    };
+    let kind = get("kind").map(|n| string(n, "kind")).transpose()?;
+    let light = match kind.unwrap_or("dir") {
+        "dir" | "directional" => {
+            let to = get("to_light").ok_or_else(|| missing("to_light", "dir"))?;
+            let e = get("irradiance").ok_or_else(|| missing("irradiance", "dir"))?;
+            let to_light = vec3(to, "to_light")?;
+            if to_light.length() == 0.0 {
+                return Err(to.at.error("`to_light` must not be the zero vector"));
+            }
+            Light::Directional {
+                to_light: to_light.normalize(),
+                irradiance: colour(e, "irradiance")?,
+            }
+        }
+        "point" => {
+            let p = get("position").ok_or_else(|| missing("position", "point"))?;
+            let i = get("intensity").ok_or_else(|| missing("intensity", "point"))?;
+            Light::Point {
+                position: vec3(p, "position")?,
+                intensity: colour(i, "intensity")?,
+            }
+        }
+        other => {
+            let at = get("kind").map_or(&node.at, |n| &n.at);
+            return Err(at.error(format!(
+                "unknown light kind {other:?}; valid: \"dir\" (to_light, irradiance) or \"point\" \
+                 (position, intensity)"
+            )));
+        }
+    };
+    located(&node.at, light.validate())?;
+    Ok(light)
+}
+
+/// `[environment]` or `environment = "none" | "builtin:studio" | "path.hdr"`.
+pub(super) fn environment(node: &Node) -> Result<EnvironmentSpec> {
+    let (mut source, mut intensity, mut rotation_deg) = (None, 1.0, 0.0);
+    if let Value::Str(_) = node.value {
+        source = Some(node);
+    } else {
+        for e in table(node, "[environment]", ENVIRONMENT_KEYS)? {
+            match e.key.as_str() {
+                "source" => source = Some(&e.node),
+                "intensity" => intensity = number(&e.node, "intensity")?,
+                _ => rotation_deg = number(&e.node, "rotation_deg")?,
+            }
+        }
+    }
+    if intensity < 0.0 {
+        return Err(node
+            .at
+            .error(format!("`intensity` must be ≥ 0, found {intensity}")));
+    }
+    let Some(source) = source else {
+        return Err(node.at.error(
+            "[environment] needs `source`: \"builtin:studio\", a .hdr/.exr path, or \"none\"",
+        ));
+    };
+    let spec = string(source, "source")?;
+    if spec.eq_ignore_ascii_case("none") {
+        return Ok(EnvironmentSpec::None);
+    }
+    let resolved = if spec.starts_with("builtin:") {
+        if spec != BUILTIN_STUDIO {
+            return Err(source.at.error(format!(
+                "unknown built-in environment {spec:?}; valid: {}",
+                BUILTIN_STUDIO
+            )));
+        }
+        spec.to_string()
+    } else {
+        let path = doc::resolve_path(&source.at, spec);
+        if !path.is_file() {
+            return Err(source.at.error(format!(
+                "environment map {} does not exist (relative paths resolve against the file \
+                 that names them)",
+                path.display()
+            )));
+        }
+        path.display().to_string()
+    };
+    Ok(EnvironmentSpec::Map {
+        source: resolved,
+        intensity,
+        rotation_deg,
+    })
+}
+
+/// `"WxH"`, both whole numbers in 1..=16384.
+fn size_text(node: &Node, s: &str) -> Result<(u32, u32)> {
+    let parsed = s.split_once(['x', 'X']).and_then(|(w, h)| {
+        let w: u32 = w.trim().parse().ok()?;
+        let h: u32 = h.trim().parse().ok()?;
+        ((1..=16384).contains(&w) && (1..=16384).contains(&h)).then_some((w, h))
+    });
+    parsed.ok_or_else(|| {
+        node.at.error(format!(
+            "`size` must be \"WxH\" with whole numbers in 1..=16384, e.g. \"1024x768\"; found {s:?}"
+        ))
+    })
+}
+
+/// `[output]`.
+pub(super) fn output(node: &Node) -> Result<OutputSpec> {
+    let mut out = OutputSpec::default();
+    for e in table(node, "[output]", OUTPUT_KEYS)? {
+        let n = &e.node;
+        match e.key.as_str() {
+            "size" => {
+                (out.width, out.height) = match &n.value {
+                    Value::Str(s) => size_text(n, s)?,
+                    Value::Array(items) if items.len() == 2 => (
+                        whole(&items[0], "size", 1..=16384)?,
+                        whole(&items[1], "size", 1..=16384)?,
+                    ),
+                    _ => {
+                        return Err(n.at.error(format!(
+                            "`size` must be \"WxH\" or [W, H], found {}",
+                            show(n)
+                        )))
+                    }
+                }
+            }
+            "width" => out.width = whole(n, "width", 1..=16384)?,
+            "height" => out.height = whole(n, "height", 1..=16384)?,
+            "samples" => {
+                out.samples = whole(n, "samples", 1..=4)?;
+                if !SUPPORTED_SAMPLES.contains(&out.samples) {
+                    return Err(n.at.error(format!(
+                        "`samples` must be one of {SUPPORTED_SAMPLES:?}, found {}",
+                        out.samples
+                    )));
+                }
+            }
+            "exposure" => out.exposure_ev = number(n, "exposure")? as f32,
+            "tonemap" => {
+                out.tone_curve = located(&n.at, string(n, "tonemap")?.parse::<ToneCurve>())?
+            }
+            "format" => {
+                format_of(n)?;
+            }
+            _ => {
+                out.background = match &n.value {
+                    Value::Str(s) if s == "env" => Background::Environment,
+                    Value::Str(s) if s == "transparent" => Background::Transparent,
+                    Value::Array(_) => {
+                        let c = vec3(n, "background")?;
+                        if c.min_element() < 0.0 {
+                            return Err(n.at.error("`background` colour components must be ≥ 0"));
+                        }
+                        Background::Color([c.x as f32, c.y as f32, c.z as f32])
+                    }
+                    _ => {
+                        return Err(n.at.error(format!(
+                            "`background` must be \"env\", \"transparent\" or a linear colour \
+                             [r, g, b], found {}",
+                            show(n)
+                        )))
+                    }
+                }
+            }
+        }
+    }
+    Ok(out)
+}
