@@ -62,9 +62,16 @@ pub fn build_material(args: &MaterialArgs) -> Result<LacquerMaterial> {
 /// A camera that frames the chosen built-in mesh, with the user's overrides applied.
 fn camera_for(mesh: BuiltinMesh, args: &RenderArgs) -> Result<Camera> {
     let mut camera = Camera::default();
-    if mesh == BuiltinMesh::Board {
+    match mesh {
         // The board lies in the XZ plane: look down at it at 45° rather than edge-on.
-        camera.eye = DVec3::new(0.0, 3.0, 3.0);
+        BuiltinMesh::Board => camera.eye = DVec3::new(0.0, 3.0, 3.0),
+        // Bowl and plate stand on y = 0: look slightly down into them.
+        BuiltinMesh::Bowl | BuiltinMesh::Plate => {
+            camera.eye = DVec3::new(0.0, 2.2, 3.2);
+            camera.target = DVec3::new(0.0, 0.3, 0.0);
+            camera.fov_deg = 30.0;
+        }
+        BuiltinMesh::Sphere => {}
     }
     if let Some(eye) = args.eye {
         camera.eye = eye;
