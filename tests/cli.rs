@@ -14,6 +14,8 @@ fn shikki(dir: &Path, args: &[&str]) -> Output {
         .args(args)
         .current_dir(dir)
         .env("SHIKKI_VALIDATION", "1")
+        // Tests must not write a pipeline cache into the user's home; the cache has its own test.
+        .env("SHIKKI_PIPELINE_CACHE", "0")
         .output()
         .expect("the shikki binary runs")
 }
@@ -484,4 +486,34 @@ fn background_modes() {
     );
     assert!(!out.status.success());
     assert!(stderr(&out).contains("purple"));
+}
+
+#[test]
+fn pipeline_cache_is_saved_reused_and_survives_corruption() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache/pipelines.bin");
+    let run = || {
+        Command::new(env!("CARGO_BIN_EXE_shikki"))
+            .args(["render", "-o", "x.png", "--size", "16x16", "--env", "none"])
+            .current_dir(dir.path())
+            .env("SHIKKI_VALIDATION", "1")
+            .env("SHIKKI_PIPELINE_CACHE", &cache)
+            .output()
+            .unwrap()
+    };
+    assert_ok(&run());
+    let data = std::fs::read(&cache).expect("the cache file is written");
+    // VkPipelineCacheHeaderVersionOne: header length 32, version 1.
+    assert!(data.len() >= 32);
+    assert_eq!(u32::from_le_bytes(data[0..4].try_into().unwrap()), 32);
+    assert_eq!(u32::from_le_bytes(data[4..8].try_into().unwrap()), 1);
+    // A warm start reads it back (validation on: zero messages).
+    assert_ok(&run());
+    // A corrupted or foreign cache is ignored, not trusted.
+    std::fs::write(
+        &cache,
+        b"not a pipeline cache at all, but long enough to look like one",
+    )
+    .unwrap();
+    assert_ok(&run());
 }

@@ -10,7 +10,7 @@ use crate::environment::gpu::{GpuEnvironment, GpuPrefilter};
 use crate::environment::load::load_environment;
 use crate::environment::params::ViewBlur;
 use crate::environment::PrefilterParams;
-use crate::gpu::{ContextOptions, GpuContext};
+use crate::gpu::GpuContext;
 use crate::model::{lacquer_brdf, LacquerMaterial};
 use crate::output::{self, PngSettings};
 use crate::raster::camera::Camera;
@@ -137,7 +137,7 @@ fn render_image(args: RenderArgs) -> Result<()> {
     // Fail before rendering if the output cannot be written.
     output::preflight_output(&args.output)?;
 
-    let gpu = GpuContext::new(&ContextOptions::from_env())?;
+    let gpu = super::open_gpu()?;
     let environment = prepare_environment(&gpu, &args.environment)?;
     let mut renderer = LacquerRenderer::new();
     let image = renderer.render(
@@ -217,7 +217,7 @@ fn prefilter(args: PrefilterArgs) -> Result<()> {
         path: args.output.clone(),
         message: format!("cannot create the output directory: {e}"),
     })?;
-    let gpu = GpuContext::new(&ContextOptions::from_env())?;
+    let gpu = super::open_gpu()?;
     let env = GpuPrefilter::new(&gpu)?.run(
         &gpu,
         &loaded.image,
@@ -263,7 +263,7 @@ fn brdf(args: BrdfArgs) -> Result<()> {
             .map(|[n, v, l]| lacquer_brdf(&params, &fresnel, *n, *v, *l))
             .collect(),
         Backend::Gpu => {
-            let gpu = GpuContext::new(&ContextOptions::from_env())?;
+            let gpu = super::open_gpu()?;
             let evaluator = BrdfEvaluator::new(&gpu)?;
             let values = evaluator.evaluate(&gpu, &params, &fresnel, &rows)?;
             gpu.check_validation()?;
@@ -286,7 +286,7 @@ fn fresnel(args: MaterialArgs) -> Result<()> {
 }
 
 fn info() -> Result<()> {
-    let gpu = GpuContext::new(&ContextOptions::from_env())?;
+    let gpu = super::open_gpu()?;
     let i = gpu.info();
     let text = format!(
         "device:               {}\n\

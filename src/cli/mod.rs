@@ -14,6 +14,32 @@ use std::process::ExitCode;
 
 pub use args::{parse_size, parse_vec3, Cli, Command};
 
+/// The CLI's GPU: the context from the environment (`SHIKKI_VALIDATION`, `SHIKKI_DEVICE`,
+/// `SHIKKI_PIPELINE_CACHE`), whose pipeline cache is saved when the command is done, so the next
+/// run starts without compiling shaders.
+pub(crate) struct CliGpu(crate::gpu::GpuContext);
+
+pub(crate) fn open_gpu() -> crate::Result<CliGpu> {
+    Ok(CliGpu(crate::gpu::GpuContext::new(
+        &crate::gpu::ContextOptions::from_env(),
+    )?))
+}
+
+impl std::ops::Deref for CliGpu {
+    type Target = crate::gpu::GpuContext;
+    fn deref(&self) -> &Self::Target {
+        &self.0
+    }
+}
+
+impl Drop for CliGpu {
+    fn drop(&mut self) {
+        if let Err(e) = self.0.save_pipeline_cache() {
+            eprintln!("warning: {e}");
+        }
+    }
+}
+
 /// Runs the CLI with the process arguments.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();

@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use super::args::RenderArgs;
-use crate::gpu::{ContextOptions, GpuContext};
 use crate::output::{self, OutputFormat, PngSettings};
 use crate::scene::batch::{self, BatchOptions, BatchPlan};
 use crate::scene::{default_scene, Scene, SceneDocument, SceneRenderer};
@@ -120,7 +119,7 @@ fn render_and_write(scene: &Scene, path: &Path) -> Result<()> {
         tone_curve: scene.output.tone_curve,
     };
     png.validate()?;
-    let gpu = GpuContext::new(&ContextOptions::from_env())?;
+    let gpu = super::open_gpu()?;
     let mut renderer = SceneRenderer::new(&gpu)?;
     let image = renderer.render(&gpu, scene)?;
     output::write_image(path, &image, &png)?;
@@ -140,7 +139,7 @@ fn render_and_write(scene: &Scene, path: &Path) -> Result<()> {
 pub fn run_batch(args: BatchArgs) -> Result<()> {
     let plan = BatchPlan::load(&args.jobs)?;
     let shard = args.shard.unwrap_or((0, 1));
-    let gpu = GpuContext::new(&ContextOptions::from_env())?;
+    let gpu = super::open_gpu()?;
     let options = BatchOptions {
         out_dir: args.out.clone(),
         shard,

@@ -24,6 +24,8 @@ pub struct AdapterInfo {
     /// Double precision in shaders (enabled when present; the prefilter uses it for exact
     /// source coordinates).
     pub shader_float64: bool,
+    /// Identity of the driver's pipeline-cache format: (vendorID, deviceID, pipelineCacheUUID).
+    pub pipeline_cache_id: (u32, u32, [u8; 16]),
 }
 
 pub(crate) struct ChosenAdapter {
@@ -155,6 +157,7 @@ fn describe(instance: &ash::Instance, device: vk::PhysicalDevice) -> AdapterInfo
         ),
         timestamp_period_ns: limits.timestamp_period,
         timestamp_compute_and_graphics: limits.timestamp_compute_and_graphics == vk::TRUE,
+        pipeline_cache_id: (props.vendor_id, props.device_id, props.pipeline_cache_uuid),
         shader_float64: {
             // SAFETY: plain query on a valid physical device.
             let features = unsafe { instance.get_physical_device_features(device) };

@@ -13,6 +13,7 @@ use super::pipeline::{
 };
 use super::query::TimestampPool;
 use ash::vk;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 /// How long a submit may take before shikki reports a hung driver instead of waiting forever.
@@ -29,6 +30,9 @@ pub struct ContextOptions {
     /// With `validation`, also the layer's synchronisation checks (hazards between commands,
     /// missing barriers); `SHIKKI_SYNC_VALIDATION=1`.
     pub synchronization_validation: bool,
+    /// A file holding the driver's pipeline cache, read at start and written by
+    /// [`GpuContext::save_pipeline_cache`]: the second run starts without compiling shaders.
+    pub pipeline_cache: Option<PathBuf>,
 }
 
 impl ContextOptions {
@@ -42,7 +46,46 @@ impl ContextOptions {
                 .filter(|s| !s.is_empty()),
             synchronization_validation: std::env::var("SHIKKI_SYNC_VALIDATION")
                 .is_ok_and(|v| v == "1"),
+            pipeline_cache: default_pipeline_cache(),
         }
+    }
+}
+
+/// `SHIKKI_PIPELINE_CACHE` (a file, or `0` for none), else `$XDG_CACHE_HOME/shikki/pipelines.bin`
+/// or `~/.cache/shikki/pipelines.bin`. The file's header names the device it belongs to.
+fn default_pipeline_cache() -> Option<PathBuf> {
+    match std::env::var_os("SHIKKI_PIPELINE_CACHE") {
+        Some(v) if v == "0" || v.is_empty() => None,
+        Some(v) => Some(PathBuf::from(v)),
+        None => std::env::var_os("XDG_CACHE_HOME")
+            .map(PathBuf::from)
+            .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))
+            .map(|dir| dir.join("shikki").join("pipelines.bin")),
+    }
+}
+
+/// The cache file's data if its header (VkPipelineCacheHeaderVersionOne: length 32, version 1,
+/// vendorID, deviceID, pipelineCacheUUID) matches this device; otherwise nothing — a stale or
+/// foreign cache is simply not used.
+fn read_pipeline_cache(path: Option<&Path>, info: &AdapterInfo) -> Vec<u8> {
+    let Some(data) = path.and_then(|p| std::fs::read(p).ok()) else {
+        return Vec::new();
+    };
+    let word = |i: usize| {
+        data.get(4 * i..4 * i + 4)
+            .and_then(|b| b.try_into().ok())
+            .map(u32::from_le_bytes)
+    };
+    let (vendor, device, uuid) = info.pipeline_cache_id;
+    let matches = word(0) == Some(32)
+        && word(1) == Some(1)
+        && word(2) == Some(vendor)
+        && word(3) == Some(device)
+        && data.get(16..32) == Some(&uuid[..]);
+    if matches {
+        data
+    } else {
+        Vec::new()
     }
 }
 
@@ -55,6 +98,7 @@ struct Submission {
 pub struct GpuContext {
     submission: Mutex<Submission>,
     shared: Arc<DeviceShared>,
+    pipeline_cache_path: Option<PathBuf>,
 }
 
 impl GpuContext {
@@ -63,6 +107,7 @@ impl GpuContext {
             options.validation,
             options.synchronization_validation,
             options.device_name.as_deref(),
+            |info| read_pipeline_cache(options.pipeline_cache.as_deref(), info),
         )?);
         // SAFETY: the queue family was chosen with one queue; index 0 exists.
         let queue = unsafe { shared.device.get_device_queue(shared.queue_family, 0) };
@@ -75,7 +120,40 @@ impl GpuContext {
         Ok(GpuContext {
             submission: Mutex::new(Submission { queue, pool }),
             shared,
+            pipeline_cache_path: options.pipeline_cache.clone(),
         })
+    }
+
+    /// Writes the driver's pipeline cache to the file named in the options (temp file + rename,
+    /// so a crash never leaves a torn cache). Nothing to do without one.
+    pub fn save_pipeline_cache(&self) -> Result<(), GpuError> {
+        let Some(path) = &self.pipeline_cache_path else {
+            return Ok(());
+        };
+        if self.shared.pipeline_cache == vk::PipelineCache::null() {
+            return Ok(());
+        }
+        // SAFETY: the cache belongs to this device; the driver synchronises cache access.
+        let data = unsafe {
+            self.shared
+                .device
+                .get_pipeline_cache_data(self.shared.pipeline_cache)
+        }
+        .during("vkGetPipelineCacheData")?;
+        let io = |e: std::io::Error| GpuError::PipelineCache {
+            path: path.clone(),
+            detail: e.to_string(),
+        };
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir).map_err(io)?;
+        }
+        let temp = path.with_extension(format!("tmp.{}", std::process::id()));
+        std::fs::write(&temp, &data)
+            .and_then(|()| std::fs::rename(&temp, path))
+            .map_err(|e| {
+                let _ = std::fs::remove_file(&temp);
+                io(e)
+            })
     }
 
     pub fn info(&self) -> &AdapterInfo {

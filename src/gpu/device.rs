@@ -17,6 +17,8 @@ pub(crate) struct DeviceShared {
     pub info: AdapterInfo,
     pub log: ValidationLog,
     pub validation: bool,
+    /// Handed to every pipeline creation; null when there is none.
+    pub pipeline_cache: vk::PipelineCache,
     allocator: ManuallyDrop<Mutex<Allocator>>,
     instance: InstanceParts,
 }
@@ -26,20 +28,40 @@ impl DeviceShared {
         validation: bool,
         synchronization_validation: bool,
         device_name: Option<&str>,
+        cache_data: impl FnOnce(&AdapterInfo) -> Vec<u8>,
     ) -> Result<Self, GpuError> {
         let log = ValidationLog::default();
         let instance = create_instance(validation, synchronization_validation, &log)?;
         // `log` stays alive here until the instance (and its messenger) is gone on every path.
         match create_device(&instance, device_name) {
-            Ok((device, adapter, allocator)) => Ok(DeviceShared {
-                device,
-                queue_family: adapter.queue_family,
-                info: adapter.info,
-                log,
-                validation,
-                allocator: ManuallyDrop::new(Mutex::new(allocator)),
-                instance,
-            }),
+            Ok((device, adapter, allocator)) => {
+                let initial = cache_data(&adapter.info);
+                let info = vk::PipelineCacheCreateInfo::default().initial_data(&initial);
+                // SAFETY: valid device; the initial data was checked against this device's cache
+                // header by the caller (and drivers must reject incompatible data anyway). A cache
+                // that cannot be made only costs speed.
+                let pipeline_cache = unsafe { device.create_pipeline_cache(&info, None) }
+                    .or_else(|_| {
+                        // SAFETY: as above, with no initial data.
+                        unsafe {
+                            device.create_pipeline_cache(
+                                &vk::PipelineCacheCreateInfo::default(),
+                                None,
+                            )
+                        }
+                    })
+                    .unwrap_or(vk::PipelineCache::null());
+                Ok(DeviceShared {
+                    device,
+                    queue_family: adapter.queue_family,
+                    info: adapter.info,
+                    log,
+                    validation,
+                    pipeline_cache,
+                    allocator: ManuallyDrop::new(Mutex::new(allocator)),
+                    instance,
+                })
+            }
             Err(err) => {
                 destroy_instance(&instance);
                 Err(err)
@@ -67,6 +89,8 @@ impl Drop for DeviceShared {
         // wait for queued work, then destroy allocator → device → messenger → instance.
         unsafe {
             let _ = self.device.device_wait_idle();
+            self.device
+                .destroy_pipeline_cache(self.pipeline_cache, None);
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_device(None);
         }

@@ -52,6 +52,11 @@ pub enum GpuError {
     },
     #[error("{count} Vulkan validation message(s):\n{messages}")]
     Validation { count: usize, messages: String },
+    #[error("cannot save the pipeline cache {path}: {detail} (set SHIKKI_PIPELINE_CACHE=0 to run without one)")]
+    PipelineCache {
+        path: std::path::PathBuf,
+        detail: String,
+    },
     #[error("invalid SPIR-V for {name}: {detail}")]
     Shader { name: &'static str, detail: String },
 }

@@ -187,7 +187,7 @@ impl ComputePipeline {
         // SAFETY: module and layout are live; info lives until return.
         let raw = unsafe {
             shared.device.create_compute_pipelines(
-                vk::PipelineCache::null(),
+                shared.pipeline_cache,
                 std::slice::from_ref(&info),
                 None,
             )
@@ -334,7 +334,7 @@ impl GraphicsPipeline {
         // SAFETY: every struct referenced by info lives on this stack frame until return.
         let raw = unsafe {
             shared.device.create_graphics_pipelines(
-                vk::PipelineCache::null(),
+                shared.pipeline_cache,
                 std::slice::from_ref(&info),
                 None,
             )

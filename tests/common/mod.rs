@@ -13,6 +13,7 @@ pub fn validated_gpu() -> GpuContext {
         device_name: std::env::var("SHIKKI_DEVICE").ok(),
         // The layer's synchronisation checks too: every test also checks the barriers.
         synchronization_validation: true,
+        pipeline_cache: None,
     };
     match GpuContext::new(&options) {
         Ok(gpu) => gpu,
