@@ -362,8 +362,8 @@ fn one_of(what: &str, valid: &[&str], got: &str) -> String {
     message
 }
 
-/// Levenshtein distance (for "did you mean").
-fn edit_distance(a: &str, b: &str) -> usize {
+/// Levenshtein distance (for "did you mean"); shared by material and scene files.
+pub fn edit_distance(a: &str, b: &str) -> usize {
     let b: Vec<char> = b.chars().collect();
     let mut row: Vec<usize> = (0..=b.len()).collect();
     for (i, ca) in a.chars().enumerate() {

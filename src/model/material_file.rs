@@ -348,26 +348,13 @@ fn unknown_key_message(key: &str) -> String {
         .chain(MATERIAL_KEYS.iter().copied())
         .collect();
     let mut message = format!("unknown key `{key}`; valid keys are {}", valid.join(", "));
-    if let Some(near) = valid.iter().min_by_key(|v| edit_distance(v, key)) {
+    if let Some(near) = valid
+        .iter()
+        .min_by_key(|v| super::material::edit_distance(v, key))
+    {
         message.push_str(&format!("; did you mean `{near}`?"));
     }
     message
-}
-
-/// Levenshtein distance, for "did you mean".
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut diagonal = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let substitute = diagonal + usize::from(ca != *cb);
-            diagonal = row[j + 1];
-            row[j + 1] = substitute.min(row[j] + 1).min(diagonal + 1);
-        }
-    }
-    row[b.len()]
 }
 
 #[cfg(test)]
@@ -576,6 +563,7 @@ mod tests {
 
     #[test]
     fn edit_distance_spot_values() {
+        use crate::model::material::edit_distance;
         assert_eq!(edit_distance("kitten", "sitting"), 3);
         assert_eq!(edit_distance("", "ab"), 2);
     }

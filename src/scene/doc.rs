@@ -373,21 +373,7 @@ pub fn set_path(root: &mut Node, path: &str, value: Node) -> Result<()> {
     Ok(())
 }
 
-/// Levenshtein distance, for "did you mean".
-pub fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut diagonal = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let substitute = diagonal + usize::from(ca != *cb);
-            diagonal = row[j + 1];
-            row[j + 1] = substitute.min(row[j] + 1).min(diagonal + 1);
-        }
-    }
-    row[b.len()]
-}
+pub use crate::model::material::edit_distance;
 
 /// "unknown key `x` in [camera]; valid keys are …; did you mean `y`?"
 pub fn unknown_key(entry: &Entry, section: &str, valid: &[&str]) -> Error {
