@@ -28,6 +28,7 @@ irradiance = 2
 
 fn shikki(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_shikki"))
+        .env("SHIKKI_PIPELINE_CACHE", "0")
         .args(args)
         .current_dir(dir)
         .env("SHIKKI_VALIDATION", "1")

@@ -9,6 +9,7 @@ use std::process::{Command, Output};
 
 fn shikki(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_shikki"))
+        .env("SHIKKI_PIPELINE_CACHE", "0")
         .args(args)
         .current_dir(dir)
         .output()

@@ -8,6 +8,7 @@ fn scene_file_with_set_overrides_renders_what_the_overrides_say() {
     let dir = tempfile::tempdir().unwrap();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.toml");
     let out = Command::new(env!("CARGO_BIN_EXE_shikki"))
+        .env("SHIKKI_PIPELINE_CACHE", "0")
         .arg("render")
         .arg(&scene)
         .args([

@@ -132,6 +132,7 @@ fn cli_scene_errors_exit_nonzero_and_write_nothing() {
         // An output from an earlier run must not survive a failed one either.
         std::fs::write(dir.path().join("x.png"), b"old").unwrap();
         let out = Command::new(env!("CARGO_BIN_EXE_shikki"))
+            .env("SHIKKI_PIPELINE_CACHE", "0")
             .args(["render", &name, "-o", "x.png"])
             .current_dir(dir.path())
             .env("SHIKKI_VALIDATION", "1")
@@ -148,6 +149,7 @@ fn cli_scene_errors_exit_nonzero_and_write_nothing() {
     // In scene mode --set paths are scene paths; a bad one is an error naming it.
     std::fs::write(dir.path().join("ok.toml"), "environment = \"none\"\n").unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_shikki"))
+        .env("SHIKKI_PIPELINE_CACHE", "0")
         .args([
             "render",
             "ok.toml",
