@@ -1,6 +1,6 @@
 //! Shared by the integration tests: a validated GPU context, a deterministic RNG, image
 //! comparison statistics and failure artefacts under target/test-output/.
-#![allow(dead_code)]
+#![allow(dead_code, unused_imports)]
 
 use shikki::gpu::{ContextOptions, GpuContext};
 use shikki::output::{HdrImage, PngSettings, ToneCurve};
