@@ -256,23 +256,7 @@ impl Recorder<'_> {
     /// Copies every layer of a single-sampled image (in TransferSrc layout) to the start of
     /// `buffer`, tightly packed, layer after layer, row 0 first.
     pub fn copy_image_to_buffer(&mut self, image: &Image, buffer: &Buffer) {
-        let desc = image.desc();
-        let region = vk::BufferImageCopy::default()
-            .buffer_offset(0)
-            .buffer_row_length(0)
-            .buffer_image_height(0)
-            .image_subresource(
-                vk::ImageSubresourceLayers::default()
-                    .aspect_mask(vk::ImageAspectFlags::COLOR)
-                    .mip_level(0)
-                    .base_array_layer(0)
-                    .layer_count(desc.layers),
-            )
-            .image_extent(vk::Extent3D {
-                width: desc.width,
-                height: desc.height,
-                depth: 1,
-            });
+        let region = whole_image_region(image);
         // SAFETY: recording; the buffer is large enough (image.byte_size()) and live.
         unsafe {
             self.device.cmd_copy_image_to_buffer(
@@ -302,20 +286,7 @@ impl Recorder<'_> {
     /// Fills every layer of `image` (in TransferDst layout) from `buffer`, tightly packed layer
     /// after layer, row 0 first: the inverse of `copy_image_to_buffer`.
     pub fn copy_buffer_to_image(&mut self, buffer: &Buffer, image: &Image) {
-        let desc = image.desc();
-        let region = vk::BufferImageCopy::default()
-            .image_subresource(
-                vk::ImageSubresourceLayers::default()
-                    .aspect_mask(vk::ImageAspectFlags::COLOR)
-                    .mip_level(0)
-                    .base_array_layer(0)
-                    .layer_count(desc.layers),
-            )
-            .image_extent(vk::Extent3D {
-                width: desc.width,
-                height: desc.height,
-                depth: 1,
-            });
+        let region = whole_image_region(image);
         // SAFETY: recording; the buffer holds image.byte_size() bytes and both are live.
         unsafe {
             self.device.cmd_copy_buffer_to_image(
@@ -327,4 +298,22 @@ impl Recorder<'_> {
             )
         };
     }
+}
+
+/// Every layer of a colour image ⇄ a tightly packed buffer (layer after layer, row 0 first).
+fn whole_image_region(image: &Image) -> vk::BufferImageCopy {
+    let desc = image.desc();
+    vk::BufferImageCopy::default()
+        .image_subresource(
+            vk::ImageSubresourceLayers::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .mip_level(0)
+                .base_array_layer(0)
+                .layer_count(desc.layers),
+        )
+        .image_extent(vk::Extent3D {
+            width: desc.width,
+            height: desc.height,
+            depth: 1,
+        })
 }

@@ -35,7 +35,6 @@ pub struct SceneRenderer {
     environments: Vec<(String, GpuEnvironment)>,
     builtin: HashMap<&'static str, Arc<Mesh>>,
     placed: Vec<(String, Arc<Mesh>)>,
-    prefilter_runs: usize,
     /// Environment warnings (replaced pixels) already printed, so a batch says each once.
     warned: Vec<String>,
 }
@@ -47,7 +46,6 @@ impl SceneRenderer {
             draw: LacquerRenderer::new(),
             prefilter: GpuPrefilter::new(gpu)?,
             environments: Vec::new(),
-            prefilter_runs: 0,
             builtin: HashMap::new(),
             placed: Vec::new(),
             warned: Vec::new(),
@@ -163,13 +161,8 @@ impl SceneRenderer {
             );
             self.warned.push(source.clone());
         }
-        // A fresh prefilter per environment: a second `run` on the same GpuPrefilter trips a
-        // READ_AFTER_WRITE hazard in its compute passes (reported to the environment owner).
-        // Environments are cached, so this costs one pipeline build per distinct environment.
-        if self.prefilter_runs > 0 {
-            self.prefilter = GpuPrefilter::new(gpu)?;
-        }
-        self.prefilter_runs += 1;
+        // One prefilter (its pipelines) for the whole run; repeated runs are hazard-free under
+        // synchronisation validation (tests/gpu_environment.rs, one_prefilter_runs_many_times…).
         let env = self
             .prefilter
             .run(gpu, &loaded.image, &params, *intensity, *rotation_deg)?;
