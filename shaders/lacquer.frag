@@ -40,6 +40,9 @@ void main() {
 
     vec3 n = normalize(in_normal);
     vec3 v = normalize(frame.eye.xyz - in_position);
+    // Light-independent parts of f_r, once per fragment (see lacquer_brdf_view).
+    vec2 nv2 = dot_compensated(n, v);
+    vec3 f_diff = view_dependent_diffuse(p, nv2);
     vec3 radiance = vec3(0.0);
     for (int i = 0; i < frame.light_count.x; ++i) {
         vec4 lv = frame.light_vector[i];
@@ -61,7 +64,7 @@ void main() {
         if (nl <= 0.0) {
             continue;
         }
-        radiance += lacquer_brdf(p, n, v, l) * irradiance * nl;
+        radiance += lacquer_brdf_view(p, n, v, l, nv2, f_diff) * irradiance * nl;
     }
     if (frame.environment.x != 0) {
         radiance += environment_light(p, n, v);

@@ -2,8 +2,13 @@
 // Step 3: one blurred layer (SPEC §4). For every output texel direction d, the brute-force sum over
 // the source cube (the mip of the same face size) of L(s)·w(d·s)·dω_s / Σ w·dω_s, with
 // w = exp((c − 1)/β²) written as exp(−|d − s|²/(2β²)) (no cancellation near c = 1) and texels with
-// |d − s|²/2 > cutoff·β² skipped. Only source texels inside a conservative per-face bounding box of
-// that cone are visited; the result is the full sum. CPU twin: environment::oracle::blur_layer.
+// |d − s|²/2 > cutoff·β² skipped. Only source texels that can pass that test are visited — the
+// faces and rows of a conservative bounding box of the cone, and in each row the span of the cone
+// (`row_span`) — so the result is the full sum. CPU twin: environment::oracle::blur_layer.
+//
+// Texel directions and solid angles are computed per visit from the row's base point: measured on
+// lavapipe, that is faster than reading them from a precomputed table, whose per-lane loads
+// (gathers) cost more than the dozen vector instructions they replace.
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
@@ -67,6 +72,43 @@ void face_window(int face, vec3 d, float theta_c, uint n, out ivec2 lo, out ivec
     }
 }
 
+// Columns [lo, hi] of row tc (face frame axis, s_dir, t_dir) whose texel centres can lie within
+// the cone around d of sin²(half-angle) = sin2; lo > hi if none. The row is the line
+// p(sc) = axis + tc·t_dir + sc·s_dir; p is inside the cone iff |p × d|² ≤ sin2·|p|² and d·p > 0.
+// With U = (axis + tc·t_dir) × d and V = s_dir × d the first is the quadratic
+// (V·V − sin2)·sc² + 2(U·V)·sc + U·U − sin2·(1 + tc²) ≤ 0 — written with cross products, so a
+// small cone does not cancel. When V·V > sin2 (the cone holds neither ±s_dir) its solutions are
+// one interval in a single nappe of the double cone, whose sign of d·p the midpoint tells; else
+// the whole row. The caller's sin2 is widened and the span gets a texel of margin each side, so
+// fp32 rounding never drops a texel the exact test keeps.
+ivec2 row_span(vec3 d, vec3 axis, vec3 s_dir, vec3 t_dir, float tc, float sin2, uint n) {
+    vec3 u = cross(axis + tc * t_dir, d);
+    vec3 v = cross(s_dir, d);
+    float qa = dot(v, v) - sin2;
+    if (qa <= 1e-4) {
+        return ivec2(0, int(n) - 1);
+    }
+    float qb = dot(u, v);
+    float qc = dot(u, u) - sin2 * (1.0 + tc * tc);
+    float disc = qb * qb - qa * qc;
+    if (disc < 0.0) {
+        return ivec2(1, 0);
+    }
+    float mid = -qb / qa;
+    float half_width = sqrt(disc) / qa;
+    if (dot(d, axis + tc * t_dir + mid * s_dir) <= 0.0) {
+        return ivec2(1, 0);
+    }
+    // Centre sc of column i is 2(i + ½)/n − 1.
+    float scale = 0.5 * float(n);
+    float lo_f = (mid - half_width + 1.0) * scale - 0.5;
+    float hi_f = (mid + half_width + 1.0) * scale - 0.5;
+    // Clamp in float first: the roots can be far outside the face.
+    lo_f = clamp(lo_f, -1.0, float(n));
+    hi_f = clamp(hi_f, -1.0, float(n));
+    return ivec2(max(int(ceil(lo_f)) - 1, 0), min(int(floor(hi_f)) + 1, int(n) - 1));
+}
+
 void main() {
     uvec3 id = gl_GlobalInvocationID;
     uint n = params.face_size;
@@ -81,21 +123,39 @@ void main() {
     // Cone half-angle of the cutoff (1 − cos θc = q_max); a little wider so rounding never
     // excludes a texel the CPU oracle includes.
     float theta_c = q_max >= 2.0 ? PI : acos_unit(1.0 - q_max) * 1.02 + 2.0 / float(n);
+    // sin²θc = q(2 − q) of the cut-off, 10 % wider (5 % in angle) plus an absolute floor, for
+    // the per-row spans.
+    float sin2 = q_max >= 1.0 ? 1.0 : 1.1 * q_max * (2.0 - q_max) + 1e-6;
+    float inv_beta2 = 1.0 / beta2;
+    float h = 2.0 / float(n);
+    float h2 = h * h;   // the solid angle (2/M)²/|p|³ of texel_direction
 
     vec3 sum = vec3(0.0);
     float weight = 0.0;
     for (int f = 0; f < 6; ++f) {
         ivec2 lo, hi;
         face_window(f, d, theta_c, n, lo, hi);
+        vec3 axis, s_dir, t_dir;
+        face_frame(f, axis, s_dir, t_dir);
+        // lavapipe's loop limiter (65535; see gpu/mod.rs) — bounded here in total, as params.rs
+        // does for the irradiance: the plan's face sizes (layer_face_size) keep the cone within
+        // ~10 texels of d — a few hundred visits — or make the cube 16² (6·16² = 1536 texels)
+        // for wide lobes.
         for (int j = lo.y; j <= hi.y; ++j) {
-            for (int i = lo.x; i <= hi.x; ++i) {
-                float solid_angle;
-                vec3 s = texel_direction(f, uint(i), uint(j), n, solid_angle);
-                vec3 diff = d - s;
+            ivec2 span = q_max >= 1.0
+                ? ivec2(lo.x, hi.x)
+                : row_span(d, axis, s_dir, t_dir, texel_coord(uint(j), n), sin2, n);
+            span = ivec2(max(span.x, lo.x), min(span.y, hi.x));
+            uint row = cube_index(f, 0u, uint(j), n);
+            vec3 row_base = axis + texel_coord(uint(j), n) * t_dir;
+            for (int i = span.x; i <= span.y; ++i) {
+                vec3 p = row_base + texel_coord(uint(i), n) * s_dir;
+                float inv_len = inversesqrt(dot(p, p));
+                vec3 diff = d - p * inv_len;
                 float q = 0.5 * dot(diff, diff);
                 if (q <= q_max) {
-                    float w = exp(-q / beta2) * solid_angle;
-                    sum += w * src[cube_index(f, uint(i), uint(j), n)].rgb;
+                    float w = exp(-q * inv_beta2) * (h2 * inv_len * inv_len * inv_len);
+                    sum += w * src[row + uint(i)].rgb;
                     weight += w;
                 }
             }

@@ -15,6 +15,7 @@
 //!  oracle/ (CPU reference: ray-casts the analytic sphere/board with model/; tests compare)
 //! ```
 
+pub mod bench;
 pub mod cli;
 pub mod compute;
 pub mod environment;

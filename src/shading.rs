@@ -63,6 +63,8 @@ pub struct FrameUniforms {
     pub camera_up: [f32; 4],
     pub camera_back: [f32; 4],
     pub camera_params: [f32; 4],
+    /// (0, first image row of the render target, 0, 0): the draw renders tall images in strips.
+    pub strip_offset: [f32; 4],
 }
 
 /// Most environment layers a draw can sample (`MAX_ENV_LAYERS` in frame.glsl).
@@ -144,6 +146,7 @@ impl FrameUniforms {
                 width as f32,
                 height as f32,
             ],
+            strip_offset: [0.0; 4],
         };
         for (i, light) in lights.iter().take(MAX_LIGHTS).enumerate() {
             let (vector, color) = match *light {

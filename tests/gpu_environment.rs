@@ -11,7 +11,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 use shikki::environment::cube::{texel_direction, world_to_environment};
 use shikki::environment::definition::{irradiance_definition, prefiltered_radiance_definition};
-use shikki::environment::gpu::GpuPrefilter;
+use shikki::environment::gpu::{GpuEnvironment, GpuPrefilter};
 use shikki::environment::params::ViewBlur;
 use shikki::environment::{oracle, CubeImage, Equirect, PrefilterParams};
 use shikki::model::brdf::view_dependent_diffuse;
@@ -416,4 +416,107 @@ fn one_prefilter_runs_many_times_without_hazards() {
         }
         assert_no_validation_messages(&gpu);
     }
+}
+
+#[test]
+fn an_uploaded_environment_reads_back_identical_texels_and_renders_the_same() {
+    let gpu = validated_gpu();
+    let source = synthetic_environment(128, 64);
+    let env = GpuPrefilter::new(&gpu)
+        .unwrap()
+        .run(&gpu, &source, &small_params(32), 1.0, 10.0)
+        .unwrap();
+    let host = env.read_back(&gpu).unwrap();
+    let uploaded = GpuEnvironment::upload(&gpu, &host).unwrap();
+    // A copy, not a computation: bit-identical.
+    assert!(uploaded.read_back(&gpu).unwrap() == host);
+    assert_eq!(uploaded.layers.len(), env.layers.len());
+    // The sampled images hold the same data: a render with either is the same image.
+    let draw = |environment: &GpuEnvironment| {
+        let material = LacquerMaterial::preset("smooth-black").unwrap();
+        LacquerRenderer::new()
+            .render(
+                &gpu,
+                &DrawScene {
+                    objects: &[DrawObject {
+                        mesh: &mesh::sphere(32, 16),
+                        brdf: &material.brdf_params().unwrap(),
+                        fresnel: &material.fresnel_table().unwrap(),
+                        view_blur: ViewBlur::of(&material),
+                    }],
+                    camera: &Camera::default(),
+                    lights: &[],
+                    environment: Some(environment),
+                    background: Background::Environment,
+                },
+                &RenderSettings {
+                    width: 64,
+                    height: 64,
+                    samples: 1,
+                },
+            )
+            .unwrap()
+    };
+    assert!(draw(&uploaded) == draw(&env), "renders differ");
+    // Malformed input is an error naming the field, not a panic.
+    let mut broken = host.clone();
+    broken.layers[1].texels[3][0] = f32::NAN;
+    let message = GpuEnvironment::upload(&gpu, &broken)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(message.contains("layers[1] texel 3"), "{message}");
+    assert_no_validation_messages(&gpu);
+}
+
+/// A map whose every pixel differs from its neighbours by a large random factor (1 … 1000), so a
+/// sub-sample that reads the wrong source pixel shows.
+fn hashed_equirect(width: u32, height: u32) -> Equirect {
+    let pixels = (0..u64::from(width) * u64::from(height))
+        .map(|index| {
+            let h = index.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40;
+            let x = 1.0 + (h % 1000) as f32;
+            [x, 1001.0 - x, 1.0 + ((h >> 10) % 100) as f32]
+        })
+        .collect();
+    Equirect {
+        width,
+        height,
+        pixels,
+    }
+}
+
+#[test]
+fn step_one_reads_exactly_the_oracles_source_pixels() {
+    let gpu = validated_gpu();
+    let prefilter = GpuPrefilter::new(&gpu).unwrap();
+    // S = 4 (16 sub-samples per texel) on both; rotations put pixel boundaries anywhere.
+    for (width, face, rotation) in [(1024, 128, 25.0), (2048, 128, -131.0), (512, 64, 0.0)] {
+        let source = hashed_equirect(width, width / 2);
+        let params = PrefilterParams {
+            face_size: face,
+            layers: 2,
+            beta_min: 1.0,
+            beta_max: 1.0,
+        };
+        let env = prefilter
+            .run(&gpu, &source, &params, 1.0, rotation)
+            .unwrap();
+        let got = &env.read_back(&gpu).unwrap().layers[0];
+        let want = oracle::equirect_to_cube(&source, face, 1.0, rotation);
+        let worst = got
+            .texels
+            .iter()
+            .zip(&want.texels)
+            .map(|(a, b)| rel_err(*a, *b, 0.0))
+            .fold(0.0, f64::max);
+        eprintln!(
+            "{width}×{}, face {face}, ρ {rotation}°: worst {worst:.2e}",
+            width / 2
+        );
+        // The mean of ≤ 16 values in fp32 vs f64: ≤ 16 roundings of 6e-8, so 1e-5 is generous;
+        // one misread sub-sample among 16 moves a texel by ~(1/16)·(a ~2× change) ≫ 1e-5.
+        assert!(worst <= 1e-5, "{width}: {worst:.3e}");
+    }
+    assert_no_validation_messages(&gpu);
 }

@@ -5,9 +5,12 @@
 // Included by equirect_to_cube.comp (fp32) and equirect_to_cube_f64.comp (PRECISE_COORDINATES):
 // in fp32 the source position px ≈ u·W carries ~3e-5 px of rounding at W = 1024, so a sub-sample
 // near a pixel boundary can read the neighbouring pixel, which at a hard HDR edge (neighbours 100×
-// apart) is a visible error against the oracle. With shaderFloat64 the direction, its
-// angles and px are computed in double (GLSL has no double atan: the fp32 angle is refined by one
-// Newton step with double sin/cos polynomials).
+// apart) is a visible error against the oracle. With shaderFloat64 the fp32 position decides only
+// where it is farther than its error bound from every pixel boundary (~99 % of sub-samples); the
+// rest are recomputed in double — direction, angles and px (GLSL has no double atan: the fp32
+// angle is refined by one Newton step with double sin/cos polynomials). lavapipe executes both
+// sides of every `if` (masked), but leaves a loop as soon as no lane is in it, so the double path
+// sits in a loop over the near sub-samples: one double evaluation per invocation, not S².
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
@@ -32,7 +35,9 @@ layout(std430, set = 0, binding = 1) writeonly buffer Cube { vec4 cube[]; };
 vec3 fetch(int x, int y) {
     int w = int(params.src_width);
     int h = int(params.src_height);
-    x = ((x % w) + w) % w;        // longitude wraps
+    // Longitude wraps: cells are in 0..=W (u ∈ [0, 1], ± rounding), so one conditional add or
+    // subtract is the remainder — integer % is not vectorised on lavapipe (it cost 2× the pass).
+    x = x < 0 ? x + w : (x >= w ? x - w : x);
     y = clamp(y, 0, h - 1);       // latitude clamps at the poles
     return equirect[uint(y) * params.src_width + uint(x)].rgb;
 }
@@ -81,7 +86,8 @@ double atan2_d(double y, double x) {
     return den > 0.0LF ? a0 + num / den : a0;
 }
 
-// Source position (px, py) in pixels for cube texel (face, i, j).
+// Source position (px, py) in pixels of sub-sample (a, b) of cube texel (face, i, j), through
+// a double atan2: for the sub-samples source_cell flags as near a pixel boundary.
 dvec2 source_position(int face, uint i, uint j, uint n, uint a, uint b) {
     double sc = 2.0LF * (double(i) + (double(a) + 0.5LF) / double(SUPERSAMPLE)) / double(n) - 1.0LF;
     double tc = 2.0LF * (double(j) + (double(b) + 0.5LF) / double(SUPERSAMPLE)) / double(n) - 1.0LF;
@@ -102,16 +108,39 @@ dvec2 source_position(int face, uint i, uint j, uint n, uint a, uint b) {
     double v = atan2_d(sqrt(e.x * e.x + e.z * e.z), e.y) / PI_D;
     return dvec2(u * double(params.src_width), v * double(params.src_height));
 }
-#else
-vec2 source_position(int face, uint i, uint j, uint n, uint a, uint b) {
+
+// Bound on |fp32 position − exact position| in pixels, ×10: the direction's x and z carry ~3e-7
+// of rounding (coordinates, normalize, rotation), which atan2 turns into 3e-7/|xz| rad, plus its
+// own 1e-7; u = ½ + angle/2π and px = u·W add half an ulp each. So u is off by ≤ 5e-8/|xz| +
+// 1.4e-7 (in units of W) and v, an angle/π whose atan2 is well conditioned, by ≤ 2e-7 (in H).
+// Measured: step_one_reads_exactly_the_oracles_source_pixels still passes with 1/20 of it.
+// Within 1e-3 of the poles the fp32 longitude is meaningless: always the double path there.
+vec2 fp32_margin(float xz_length) {
+    float w = float(params.src_width);
+    float h = float(params.src_height);
+    return vec2(w * (5e-7 / max(xz_length, 1e-3) + 1.4e-6), h * 2e-6);
+}
+#endif
+
+// The source cell of sub-sample (a, b) of texel (face, i, j) in fp32. `near`: it may be wrong
+// (double path only; see fp32_margin).
+ivec2 source_cell(int face, uint i, uint j, uint n, uint a, uint b, out bool near) {
     float sc = 2.0 * (float(i) + (float(a) + 0.5) / float(SUPERSAMPLE)) / float(n) - 1.0;
     float tc = 2.0 * (float(j) + (float(b) + 0.5) / float(SUPERSAMPLE)) / float(n) - 1.0;
     vec3 d = normalize(face_direction(face, sc, tc));
     vec3 e = world_to_environment(d, params.rotation_cos, params.rotation_sin);
     vec2 uv = direction_to_equirect(e);
-    return vec2(uv.x * float(params.src_width), uv.y * float(params.src_height));
-}
+    vec2 p = vec2(uv.x * float(params.src_width), uv.y * float(params.src_height));
+    vec2 cell = floor(p);
+#ifdef PRECISE_COORDINATES
+    vec2 frac = p - cell;
+    float xz_length = length(e.xz);
+    near = xz_length < 1e-3 || any(lessThan(min(frac, 1.0 - frac), fp32_margin(xz_length)));
+#else
+    near = false;
 #endif
+    return ivec2(cell);
+}
 
 void main() {
     uvec3 id = gl_GlobalInvocationID;
@@ -121,16 +150,27 @@ void main() {
     }
     int face = int(id.z);
     vec3 sum = vec3(0.0);
+    // Sub-samples near a pixel boundary, as bits b·S + a (S² ≤ 16: MAX_EQUIRECT_SUPERSAMPLE = 4);
+    // they are added after the others (a different fp32 summation order, nothing more).
+    uint near_bits = 0u;
     for (uint b = 0u; b < SUPERSAMPLE; ++b) {
         for (uint a = 0u; a < SUPERSAMPLE; ++a) {
-#ifdef PRECISE_COORDINATES
-            dvec2 p = floor(source_position(face, id.x, id.y, n, a, b));
-#else
-            vec2 p = floor(source_position(face, id.x, id.y, n, a, b));
-#endif
-            sum += fetch(int(p.x), int(p.y));
+            bool near;
+            ivec2 cell = source_cell(face, id.x, id.y, n, a, b, near);
+            near_bits |= near ? 1u << (b * SUPERSAMPLE + a) : 0u;
+            sum += near ? vec3(0.0) : fetch(cell.x, cell.y);
         }
     }
+#ifdef PRECISE_COORDINATES
+    // At most S² ≤ 16 iterations.
+    while (near_bits != 0u) {
+        uint bit = uint(findLSB(near_bits));
+        near_bits &= ~(1u << bit);
+        ivec2 cell = ivec2(floor(source_position(
+            face, id.x, id.y, n, bit % SUPERSAMPLE, bit / SUPERSAMPLE)));
+        sum += fetch(cell.x, cell.y);
+    }
+#endif
     cube[cube_index(face, id.x, id.y, n)] =
         vec4(sum * (params.intensity / float(SUPERSAMPLE * SUPERSAMPLE)), 1.0);
 }

@@ -5,6 +5,10 @@
 
 const int MAX_LIGHTS = 16;
 const int MAX_ENV_LAYERS = 16;
+// K, the bound environment's layer count, set per pipeline (raster/draw.rs): lavapipe has no
+// shaderSampledImageArrayDynamicIndexing, so env_layers takes constant indices only, and a
+// constant K removes the absent layers' lookups at pipeline creation.
+layout(constant_id = 0) const int ENV_LAYER_COUNT = MAX_ENV_LAYERS;
 
 layout(std140, set = 0, binding = 0) uniform Frame {
     mat4 view_projection;
@@ -22,6 +26,7 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 camera_up;
     vec4 camera_back;      // −view direction
     vec4 camera_params;    // tan(fov/2), aspect W/H, width, height
+    vec4 strip_offset;     // y: image row of the target's row 0 (tall images render in strips)
 } frame;
 
 layout(set = 0, binding = 2) uniform samplerCube env_layers[MAX_ENV_LAYERS];
@@ -31,48 +36,57 @@ float layer_beta(int k) {
     return frame.layer_beta[k / 4][k % 4];
 }
 
-// Constant indices only: a per-fragment index into a sampler array would need nonuniformEXT.
-vec3 sample_layer(int k, vec3 dir) {
-    switch (k) {
-    case 0: return textureLod(env_layers[0], dir, 0.0).rgb;
-    case 1: return textureLod(env_layers[1], dir, 0.0).rgb;
-    case 2: return textureLod(env_layers[2], dir, 0.0).rgb;
-    case 3: return textureLod(env_layers[3], dir, 0.0).rgb;
-    case 4: return textureLod(env_layers[4], dir, 0.0).rgb;
-    case 5: return textureLod(env_layers[5], dir, 0.0).rgb;
-    case 6: return textureLod(env_layers[6], dir, 0.0).rgb;
-    case 7: return textureLod(env_layers[7], dir, 0.0).rgb;
-    case 8: return textureLod(env_layers[8], dir, 0.0).rgb;
-    case 9: return textureLod(env_layers[9], dir, 0.0).rgb;
-    case 10: return textureLod(env_layers[10], dir, 0.0).rgb;
-    case 11: return textureLod(env_layers[11], dir, 0.0).rgb;
-    case 12: return textureLod(env_layers[12], dir, 0.0).rgb;
-    case 13: return textureLod(env_layers[13], dir, 0.0).rgb;
-    case 14: return textureLod(env_layers[14], dir, 0.0).rgb;
-    default: return textureLod(env_layers[15], dir, 0.0).rgb;
-    }
-}
-
 // Lpre(dir, β) of SPEC §4 from the layers: linear in β between layers 0 and 1, linear in log β
 // above, the last layer beyond β_max. Twin of environment::params::layer_blend.
+//
+// Why a weighted sum over all K layers instead of sampling the two that matter: the pair differs
+// between fragments, and indexing a sampler array with anything but a constant needs
+// shaderSampledImageArrayDynamicIndexing, which lavapipe 22.3 does not have (so not even a
+// dynamically uniform loop index is allowed). The old form (a 16-case `switch` per lookup, called
+// up to twice per candidate layer) made llvmpipe, which runs every case of a divergent switch under
+// a lane mask, do ~240 cube fetches per fragment; this does K, each at a constant index. Exact:
+// the weights are (1 − t, t) on layers (k0, k0 + 1) and 0 elsewhere, so the sum is
+// mix(L_k0, L_k0+1, t) plus exact zeros.
 vec3 prefiltered_radiance(vec3 dir, float beta) {
-    int count = frame.environment.y;
-    if (count <= 1 || beta <= 0.0) {
-        return sample_layer(0, dir);
-    }
-    float beta1 = layer_beta(1);
-    if (beta < beta1) {
-        return mix(sample_layer(0, dir), sample_layer(1, dir), beta / beta1);
-    }
-    for (int k = 1; k < count - 1; ++k) {
-        float lo = layer_beta(k);
-        float hi = layer_beta(k + 1);
-        if (beta < hi) {
-            float t = (log(beta) - log(lo)) / (log(hi) - log(lo));
-            return mix(sample_layer(k, dir), sample_layer(k + 1, dir), t);
+    int count = ENV_LAYER_COUNT;
+    int k0 = 0;
+    float t = 0.0;
+    if (count > 1 && beta > 0.0) {
+        float beta1 = layer_beta(1);
+        if (beta < beta1) {
+            t = beta / beta1;
+        } else {
+            k0 = count - 1;
+            for (int k = 1; k < count - 1; ++k) {
+                float lo = layer_beta(k);
+                float hi = layer_beta(k + 1);
+                if (beta < hi) {
+                    k0 = k;
+                    t = (log(beta) - log(lo)) / (log(hi) - log(lo));
+                    break;
+                }
+            }
         }
     }
-    return sample_layer(count - 1, dir);
+    vec3 sum = vec3(0.0);
+#define ADD_LAYER(K)                                                            \
+    if (K < ENV_LAYER_COUNT) {                                                  \
+        float w = K == k0 ? 1.0 - t : (K == k0 + 1 ? t : 0.0);                 \
+        if (w != 0.0) {                                                         \
+            sum += textureLod(env_layers[K], dir, 0.0).rgb * w;                 \
+        }                                                                       \
+    }
+    ADD_LAYER(0) ADD_LAYER(1) ADD_LAYER(2) ADD_LAYER(3)
+    ADD_LAYER(4) ADD_LAYER(5) ADD_LAYER(6) ADD_LAYER(7)
+    ADD_LAYER(8) ADD_LAYER(9) ADD_LAYER(10) ADD_LAYER(11)
+    ADD_LAYER(12) ADD_LAYER(13) ADD_LAYER(14) ADD_LAYER(15)
+#undef ADD_LAYER
+    return sum;
+}
+
+// The sharp layer along `dir` (the background).
+vec3 sharp_radiance(vec3 dir) {
+    return textureLod(env_layers[0], dir, 0.0).rgb;
 }
 
 #endif

@@ -81,15 +81,28 @@ float view_factor(LacquerParams p, vec2 nv) {
 // F(θ): linear interpolation in the table; θ in degrees, clamped to [0, 90].
 vec3 fresnel_table(float theta_deg, int count) {
     float theta = clamp(theta_deg, 0.0, 90.0);
-    // Binary search for the last knot with angle <= theta (tables are short; log2(91) ≈ 7 steps).
-    int lo = 0;
-    int hi = count - 1;
-    while (hi - lo > 1) {
-        int mid = (lo + hi) / 2;
-        if (fresnel_knots[mid].x <= theta) {
-            lo = mid;
-        } else {
-            hi = mid;
+    // The interval is [lo, lo + 1] with lo the last knot ≤ θ among 0..count-2. Evenly spaced
+    // tables (every built-in one: a knot per degree) are indexed directly; the guess is checked
+    // against that definition, and anything else (uneven knots, a rounding at a knot) falls back
+    // to the binary search, so the result is the search's exactly. Why: the search is a divergent
+    // loop of dependent buffer reads, run four times per fragment.
+    int last = count - 2;
+    float step = fresnel_knots[1].x - fresnel_knots[0].x;
+    int lo = clamp(int(theta / step), 0, last);
+    bool found = fresnel_knots[lo].x <= theta
+        && (lo == last || fresnel_knots[lo + 1].x > theta);
+    int hi = lo + 1;
+    if (!found) {
+        // Binary search for the last knot with angle <= theta (log2(91) ≈ 7 steps).
+        lo = 0;
+        hi = count - 1;
+        while (hi - lo > 1) {
+            int mid = (lo + hi) / 2;
+            if (fresnel_knots[mid].x <= theta) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
         }
     }
     vec4 k0 = fresnel_knots[lo];
@@ -131,9 +144,10 @@ vec3 view_dependent_diffuse(LacquerParams p, vec2 nv) {
     return p.albedo * (max(view_factor(p, nv), 0.0) * p.lacquer_g / PI);
 }
 
-// f_r(N, V, L) [1/sr]; n, v, l unit vectors.
-vec3 lacquer_brdf(LacquerParams p, vec3 n, vec3 v, vec3 l) {
-    vec2 nv2 = dot_compensated(n, v);
+// f_r(N, V, L) [1/sr] given the light-independent parts: nv2 = dot_compensated(n, v) and
+// f_diff = view_dependent_diffuse(p, nv2). lacquer.frag computes those once per fragment, not
+// once per light; the result is the same operations on the same values as lacquer_brdf.
+vec3 lacquer_brdf_view(LacquerParams p, vec3 n, vec3 v, vec3 l, vec2 nv2, vec3 f_diff) {
     float nv = nv2.x + nv2.y;
     float nl = dot(n, l);
     if (nv <= 0.0 || nl <= 0.0) {
@@ -141,7 +155,6 @@ vec3 lacquer_brdf(LacquerParams p, vec3 n, vec3 v, vec3 l) {
     }
     vec3 half_sum = v + l;
     float half_len = length(half_sum);
-    vec3 f_diff = view_dependent_diffuse(p, nv2);
     if (half_len <= 0.0) {
         return f_diff;
     }
@@ -153,6 +166,12 @@ vec3 lacquer_brdf(LacquerParams p, vec3 n, vec3 v, vec3 l) {
     vec3 f = fresnel_table(angle_deg_of_cos(vh), p.fresnel_count);
     vec3 f_spec = f * (d * g / (4.0 * nv * nl));
     return f_diff + f_spec;
+}
+
+// f_r(N, V, L) [1/sr]; n, v, l unit vectors.
+vec3 lacquer_brdf(LacquerParams p, vec3 n, vec3 v, vec3 l) {
+    vec2 nv2 = dot_compensated(n, v);
+    return lacquer_brdf_view(p, n, v, l, nv2, view_dependent_diffuse(p, nv2));
 }
 
 #endif

@@ -39,6 +39,9 @@ pub enum Command {
     /// Render every job of a jobs file (a base scene plus sweeps): images, manifest.csv and
     /// contact_sheet.png.
     Batch(super::scene_cmd::BatchArgs),
+    /// Measure every stage (render, prefilter, batch, start-up, memory): medians of repeated runs
+    /// and same-run ratios against the performance targets (BENCHMARKS.md).
+    Bench(super::bench::BenchArgs),
 }
 
 /// A preset and `--set` overrides: the material of SPEC §2–3.

@@ -6,6 +6,7 @@ use super::args::{
 use super::directions;
 use super::scene_cmd;
 use crate::compute::BrdfEvaluator;
+use crate::environment::disk_cache::{prefilter_cached, EnvironmentDiskCache};
 use crate::environment::gpu::{GpuEnvironment, GpuPrefilter};
 use crate::environment::load::load_environment;
 use crate::environment::params::ViewBlur;
@@ -30,6 +31,7 @@ pub fn run(cli: Cli) -> Result<()> {
             None => render(args),
         },
         Some(Command::Batch(args)) => scene_cmd::run_batch(args),
+        Some(Command::Bench(args)) => super::bench::run_bench(args),
         Some(Command::Brdf(args)) => brdf(args),
         Some(Command::Fresnel(args)) => fresnel(args),
         Some(Command::Info) => info(),
@@ -183,8 +185,11 @@ fn prepare_environment(gpu: &GpuContext, args: &EnvironmentArgs) -> Result<Optio
     let loaded = load_environment(&args.env)?;
     warn_replaced(&loaded.source, loaded.replaced_pixels);
     let params = PrefilterParams::for_source_width(loaded.image.width);
-    let env = GpuPrefilter::new(gpu)?.run(
+    let cache = EnvironmentDiskCache::beside_pipeline_cache(gpu.pipeline_cache_path());
+    let env = prefilter_cached(
         gpu,
+        &mut None,
+        cache.as_ref(),
         &loaded.image,
         &params,
         args.intensity,
@@ -328,7 +333,7 @@ fn info() -> Result<()> {
 }
 
 /// Writes to stdout; a closed pipe (`shikki brdf … | head`) is not an error worth a panic.
-fn write_stdout(text: &str) -> Result<()> {
+pub(super) fn write_stdout(text: &str) -> Result<()> {
     let mut stdout = std::io::stdout().lock();
     match stdout
         .write_all(text.as_bytes())

@@ -4,6 +4,7 @@
 //! usage errors exit with 2.
 
 mod args;
+mod bench;
 mod commands;
 mod directions;
 mod fit;
@@ -43,7 +44,14 @@ impl Drop for CliGpu {
 /// Runs the CLI with the process arguments.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
-    match commands::run(cli) {
+    let result = commands::run(cli);
+    // `shikki bench` measures its child renders' peak memory this way (VmHWM at exit).
+    if std::env::var_os(crate::bench::startup::REPORT_PEAK_MEMORY).is_some_and(|v| v == "1") {
+        if let Some(kib) = crate::bench::startup::peak_rss_kib() {
+            eprintln!("{}{kib}", crate::bench::startup::PEAK_MEMORY_PREFIX);
+        }
+    }
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("error: {err}");

@@ -2,6 +2,8 @@
 //! scene schema, renderer and batch runner live in `crate::scene`.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 
 use clap::Args;
 
@@ -135,17 +137,21 @@ fn render_and_write(scene: &Scene, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// `shikki batch`: exit code ≠ 0 if any job failed (after all others ran).
+/// The exit code of a batch stopped by Ctrl-C (SIGINT): 128 + 2, the shell's convention.
+pub const EXIT_INTERRUPTED: i32 = 130;
+
+/// `shikki batch`: exit code ≠ 0 if any job failed (after all others ran). The first SIGINT stops
+/// the batch after the image in flight (manifest and contact sheet written, exit
+/// [`EXIT_INTERRUPTED`]); a second one exits at once (outputs are atomic: no partial file).
 pub fn run_batch(args: BatchArgs) -> Result<()> {
     let plan = BatchPlan::load(&args.jobs)?;
     let shard = args.shard.unwrap_or((0, 1));
     let gpu = super::open_gpu()?;
-    let options = BatchOptions {
-        out_dir: args.out.clone(),
-        shard,
-        force: args.force,
-        progress: !args.quiet,
-    };
+    let mut options = BatchOptions::new(args.out.clone());
+    options.shard = shard;
+    options.force = args.force;
+    options.progress = !args.quiet;
+    watch_interrupts(&options.cancel);
     let summary = batch::run_batch(&gpu, &plan, &options)?;
     eprintln!(
         "batch: {} rendered, {} skipped (already done), {} failed; {} and {}",
@@ -155,6 +161,18 @@ pub fn run_batch(args: BatchArgs) -> Result<()> {
         summary.manifest.display(),
         summary.contact_sheet.display()
     );
+    if summary.cancelled {
+        eprintln!(
+            "interrupted: {} job(s) not started; run the same command again to resume (finished \
+             jobs are skipped)",
+            summary.not_started
+        );
+        // Saves the pipeline cache: process::exit runs no destructors.
+        drop(gpu);
+        // The CLI maps every error to exit code 1; a script must be able to tell an interrupted
+        // batch from a failed one.
+        std::process::exit(EXIT_INTERRUPTED);
+    }
     if summary.failed > 0 {
         return Err(Error::invalid(
             "batch",
@@ -164,4 +182,20 @@ pub fn run_batch(args: BatchArgs) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// SIGINT sets `cancel`; a second SIGINT (cancel already set) exits with [`EXIT_INTERRUPTED`] at
+/// once. Without a handler, Ctrl-C still kills the batch with nothing partial left behind.
+fn watch_interrupts(cancel: &Arc<AtomicBool>) {
+    use signal_hook::consts::SIGINT;
+    // Registered first, so it sees the flag as it was before this signal set it.
+    let second = signal_hook::flag::register_conditional_shutdown(
+        SIGINT,
+        EXIT_INTERRUPTED,
+        Arc::clone(cancel),
+    );
+    let first = signal_hook::flag::register(SIGINT, Arc::clone(cancel));
+    if let Err(e) = second.and(first) {
+        eprintln!("warning: cannot handle Ctrl-C ({e}); it will stop the batch at once");
+    }
 }

@@ -10,6 +10,8 @@ use crate::gpu::{
 };
 use crate::{Error, Result};
 
+mod upload;
+
 /// Threads per workgroup side; must equal local_size_x/y in the prefilter shaders.
 const WORKGROUP: u32 = 8;
 

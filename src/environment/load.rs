@@ -4,7 +4,8 @@
 //! does not know about cubes, the prefilter or the CLI (which prints the warning).
 //!
 //! Every size is checked against [`MAX_SIDE`] and [`MAX_PIXELS`] before anything is allocated, so
-//! a hostile header cannot make us ask for gigabytes.
+//! a hostile header cannot make us ask for gigabytes; a file larger than [`MAX_ENV_FILE_BYTES`]
+//! is refused from its length before it is read.
 
 use std::io::Cursor;
 use std::path::Path;
@@ -25,6 +26,9 @@ const STUDIO_HDR: &[u8] = include_bytes!("../../assets/env/studio.hdr");
 pub const MAX_SIDE: usize = 32768;
 /// Largest pixel count accepted: 2^28 pixels are 3 GiB as f32 RGB.
 pub const MAX_PIXELS: usize = 1 << 28;
+
+/// Largest environment file read (4 GiB): an uncompressed float RGBA EXR at [`MAX_PIXELS`].
+pub const MAX_ENV_FILE_BYTES: u64 = 1 << 32;
 
 /// How a Radiance header may spend at most before its blank line: real headers are < 1 KiB.
 const MAX_HDR_HEADER: usize = 64 * 1024;
@@ -58,10 +62,22 @@ pub fn load_environment(spec: &str) -> Result<LoadedEnvironment> {
             ))
         }
     };
-    let bytes = std::fs::read(spec).map_err(|source| Error::Read {
+    let read_error = |source| Error::Read {
         path: spec.into(),
         source,
-    })?;
+    };
+    let length = std::fs::metadata(spec).map_err(read_error)?.len();
+    if length > MAX_ENV_FILE_BYTES {
+        return Err(Error::invalid(
+            "environment file",
+            format!("{spec} ({length} bytes)"),
+            format!(
+                "at most {MAX_ENV_FILE_BYTES} bytes (4 GiB) are read; downscale the image or \
+                 re-save it compressed (e.g. EXR with PIZ or ZIP)"
+            ),
+        ));
+    }
+    let bytes = std::fs::read(spec).map_err(read_error)?;
     sanitized(decode(&bytes, spec)?, spec)
 }
 
@@ -180,9 +196,17 @@ fn parse_hdr_header<'a>(bytes: &'a [u8], source: &str) -> Result<(usize, usize, 
         Error::parse(
             source,
             line,
-            "Radiance header ends without its resolution line",
+            "the Radiance header ends without its resolution line (-Y <height> +X <width>): \
+             the file is truncated or not an HDR image; re-export it",
         )
     };
+    if bytes.is_empty() {
+        return Err(Error::parse(
+            source,
+            1,
+            "the file is empty; a Radiance HDR starts with the line #?RADIANCE",
+        ));
+    }
 
     line_number += 1;
     let magic = next_line(&mut at).ok_or_else(|| unterminated(line_number))?;

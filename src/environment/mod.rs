@@ -13,6 +13,7 @@
 
 pub mod cube;
 pub mod definition;
+pub mod disk_cache;
 pub mod gpu;
 pub mod image;
 pub mod load;

@@ -10,6 +10,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use super::data::{light_direction, view_direction, Measurement, Measurements, Sample};
+use crate::model::material_file::read_text_file;
 use crate::model::spectral::reflectance_to_rgb;
 use crate::{Error, Result};
 
@@ -22,12 +23,12 @@ pub const RGB_COLUMNS: [&str; 3] = ["R", "G", "B"];
 const HEADER_HELP: &str = "the header must name sample, r, theta_i_deg, theta_o_deg, phi_deg \
     and then R,G,B or wavelengths in nm covering 380–780 (e.g. 380,390,…,780)";
 
-/// Reads a goniometer CSV file.
+/// The largest goniometer CSV read (1 GiB): a dense measurement of a few million rows.
+pub const MAX_GONIOMETER_CSV_BYTES: u64 = 1 << 30;
+
+/// Reads a goniometer CSV file (at most [`MAX_GONIOMETER_CSV_BYTES`]).
 pub fn read_goniometer_csv(path: &Path) -> Result<Measurements> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = read_text_file(path, MAX_GONIOMETER_CSV_BYTES, "goniometer CSV")?;
     parse_goniometer_csv(&text, &path.display().to_string())
 }
 

@@ -4,8 +4,9 @@
 //!
 //! Owns the layout, the index ↔ direction mapping of MERL's reference reader (BRDFRead.cpp) and
 //! both directions of conversion. Values are f_r [1/sr]; negative entries mean "not measured"
-//! and are skipped. Index → angles uses each bin's lower edge, θ_h = (i/90)²·90°, θ_d = j°,
-//! φ_d = k°: the inverse of the reference reader's index functions (which floor).
+//! and are skipped, as are NaN, infinite and overflowing (π·f_r not finite) ones. Index → angles
+//! uses each bin's lower edge, θ_h = (i/90)²·90°, θ_d = j°, φ_d = k°: the inverse of the
+//! reference reader's index functions (which floor).
 //!
 //! MERL assumes reciprocity (φ_d covers only [0°, 360°/2)); shikki's diffuse term is not
 //! reciprocal (SPEC §2), so a file written from the model holds f_r with `in` = L (MERL's light)
@@ -77,42 +78,35 @@ pub fn merl_bytes(mut brdf: impl FnMut(DVec3, DVec3) -> [f64; 3]) -> Vec<u8> {
 }
 
 /// Reads a MERL file as one sample (`r` = 1), every [`MERL_PHI_D_STRIDE`]-th φ_d bin.
+/// A file whose length is not [`MERL_FILE_BYTES`] is refused before it is read.
 pub fn read_merl(path: &Path) -> Result<Measurements> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Read {
+    let read_error = |source| Error::Read {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    let length = std::fs::metadata(path).map_err(read_error)?.len();
+    if length != MERL_FILE_BYTES as u64 {
+        // The header, when there is one, says more than the length: read just it.
+        let mut head = Vec::with_capacity(12);
+        std::io::Read::read_to_end(
+            &mut std::io::Read::take(std::fs::File::open(path).map_err(read_error)?, 12),
+            &mut head,
+        )
+        .map_err(read_error)?;
+        let source = path.display().to_string();
+        check_merl_header(&head, &source)?;
+        return Err(wrong_merl_length(length, &source));
+    }
+    let bytes = std::fs::read(path).map_err(read_error)?;
     parse_merl(&bytes, &path.display().to_string(), MERL_PHI_D_STRIDE)
 }
 
 /// Parses MERL bytes into measurements (reflectance factor π·f_r), keeping every
 /// `phi_d_stride`-th φ_d bin and skipping entries that are not measured or below the horizon.
 pub fn parse_merl(bytes: &[u8], source: &str, phi_d_stride: usize) -> Result<Measurements> {
-    let field = format!("MERL file {source}");
-    let header: Vec<i32> = bytes
-        .chunks_exact(4)
-        .take(3)
-        .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect();
-    let expected_dims = MERL_DIMS.map(|d| d as i32);
-    if header.len() == 3 && header != expected_dims {
-        return Err(Error::invalid(
-            field,
-            format!("header {} × {} × {}", header[0], header[1], header[2]),
-            "an isotropic MERL BRDF has the header 90 × 90 × 180 (θ_h, θ_d, φ_d); this file is \
-             another kind of data",
-        ));
-    }
+    check_merl_header(bytes, source)?;
     if bytes.len() != MERL_FILE_BYTES {
-        return Err(Error::invalid(
-            field,
-            format!("{} bytes", bytes.len()),
-            format!(
-                "a MERL BRDF has exactly {MERL_FILE_BYTES} bytes (a 12-byte header, then R, G \
-                 and B blocks of {MERL_ENTRIES} float64); the file is truncated or not a MERL \
-                 BRDF"
-            ),
-        ));
+        return Err(wrong_merl_length(bytes.len() as u64, source));
     }
     let value = |c: usize, at: usize| {
         let start = 12 + (c * MERL_ENTRIES + at) * 8;
@@ -127,7 +121,11 @@ pub fn parse_merl(bytes: &[u8], source: &str, phi_d_stride: usize) -> Result<Mea
                 let (light, view) = merl_directions(i, j, k);
                 let at = index(i, j, k);
                 let stored = [value(0, at), value(1, at), value(2, at)];
-                let measured = stored.iter().all(|v| v.is_finite() && *v >= 0.0);
+                let reflectance: [f64; 3] =
+                    std::array::from_fn(|c| std::f64::consts::PI * stored[c] * MERL_SCALE[c]);
+                // A value near f64::MAX overflows π·f_r: as unusable as NaN, so not measured.
+                let measured = stored.iter().all(|v| v.is_finite() && *v >= 0.0)
+                    && reflectance.iter().all(|v| v.is_finite());
                 if !measured || light.z <= 0.0 || view.z <= 0.0 {
                     continue;
                 }
@@ -135,9 +133,7 @@ pub fn parse_merl(bytes: &[u8], source: &str, phi_d_stride: usize) -> Result<Mea
                     sample: 0,
                     light,
                     view,
-                    reflectance: std::array::from_fn(|c| {
-                        std::f64::consts::PI * stored[c] * MERL_SCALE[c]
-                    }),
+                    reflectance,
                     line: 0,
                 });
             }
@@ -151,6 +147,37 @@ pub fn parse_merl(bytes: &[u8], source: &str, phi_d_stride: usize) -> Result<Mea
         }],
         rows,
     })
+}
+
+/// The three int32 dimensions, if the bytes are long enough to have them, must be 90, 90, 180.
+fn check_merl_header(bytes: &[u8], source: &str) -> Result<()> {
+    let header: Vec<i32> = bytes
+        .chunks_exact(4)
+        .take(3)
+        .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    let expected_dims = MERL_DIMS.map(|d| d as i32);
+    if header.len() == 3 && header != expected_dims {
+        return Err(Error::invalid(
+            format!("MERL file {source}"),
+            format!("header {} × {} × {}", header[0], header[1], header[2]),
+            "an isotropic MERL BRDF has the header 90 × 90 × 180 (θ_h, θ_d, φ_d); this file is \
+             another kind of data",
+        ));
+    }
+    Ok(())
+}
+
+fn wrong_merl_length(length: u64, source: &str) -> Error {
+    Error::invalid(
+        format!("MERL file {source}"),
+        format!("{length} bytes"),
+        format!(
+            "a MERL BRDF has exactly {MERL_FILE_BYTES} bytes (a 12-byte header, then R, G \
+             and B blocks of {MERL_ENTRIES} float64); the file is truncated or not a MERL \
+             BRDF"
+        ),
+    )
 }
 
 /// MERL's flat index: φ_d fastest, then θ_d, then θ_h.

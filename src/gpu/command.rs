@@ -168,6 +168,24 @@ impl Recorder<'_> {
         }
     }
 
+    /// Replaces the viewport `begin_rendering` set (the scissor stays the whole target): a target
+    /// holding rows `y..` of a taller image is drawn with the image's viewport moved up by `y`.
+    pub fn set_viewport(&mut self, x: f32, y: f32, width: f32, height: f32) {
+        let viewport = vk::Viewport {
+            x,
+            y,
+            width,
+            height,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        // SAFETY: recording; the pipeline declares the viewport dynamic.
+        unsafe {
+            self.device
+                .cmd_set_viewport(self.cmd, 0, std::slice::from_ref(&viewport))
+        };
+    }
+
     pub fn end_rendering(&mut self) {
         // SAFETY: matches begin_rendering.
         unsafe { self.device.cmd_end_rendering(self.cmd) };
@@ -258,6 +276,30 @@ impl Recorder<'_> {
     pub fn copy_image_to_buffer(&mut self, image: &Image, buffer: &Buffer) {
         let region = whole_image_region(image);
         // SAFETY: recording; the buffer is large enough (image.byte_size()) and live.
+        unsafe {
+            self.device.cmd_copy_image_to_buffer(
+                self.cmd,
+                image.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                buffer.raw,
+                std::slice::from_ref(&region),
+            )
+        };
+    }
+
+    /// Copies the first `rows` rows of a single-sampled 2D image (in TransferSrc layout) into
+    /// `buffer` at byte `offset`, tightly packed.
+    pub fn copy_image_rows_to_buffer(
+        &mut self,
+        image: &Image,
+        rows: u32,
+        buffer: &Buffer,
+        offset: u64,
+    ) {
+        let mut region = whole_image_region(image);
+        region.buffer_offset = offset;
+        region.image_extent.height = rows.min(image.desc().height);
+        // SAFETY: recording; the caller sizes `buffer` to hold `offset` plus the rows copied.
         unsafe {
             self.device.cmd_copy_image_to_buffer(
                 self.cmd,

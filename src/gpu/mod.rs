@@ -42,6 +42,7 @@ pub use buffer::{Buffer, BufferDesc, BufferUsage, MemoryUse};
 pub use command::{ImageUse, Recorder, RenderTargets};
 pub use context::{ContextOptions, GpuContext};
 pub use conv::{Access, Format, Layout};
+pub use debug::ValidationLog;
 pub use error::GpuError;
 pub use image::{Image, ImageDesc, ImageUsage, Sampler};
 pub use pipeline::{

@@ -232,6 +232,8 @@ pub struct GraphicsPipelineDesc<'a> {
     pub samples: u32,
     /// Depth test (less) and write; off for full-screen passes such as the background.
     pub depth_test: bool,
+    /// The fragment stage's 32-bit specialization constants: entry i sets `constant_id = i`.
+    pub fragment_constants: &'a [u32],
 }
 
 /// A graphics pipeline for dynamic rendering (no render pass objects), with dynamic viewport and
@@ -254,6 +256,16 @@ impl GraphicsPipeline {
         )?;
         let vertex = ShaderModule::new(&shared.device, desc.name, desc.vertex_spirv)?;
         let fragment = ShaderModule::new(&shared.device, desc.name, desc.fragment_spirv)?;
+        let constant_entries: Vec<vk::SpecializationMapEntry> = (0..desc.fragment_constants.len())
+            .map(|i| vk::SpecializationMapEntry {
+                constant_id: i as u32,
+                offset: (i * 4) as u32,
+                size: 4,
+            })
+            .collect();
+        let specialization = vk::SpecializationInfo::default()
+            .map_entries(&constant_entries)
+            .data(bytemuck::cast_slice(desc.fragment_constants));
         let stages = [
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::VERTEX)
@@ -262,7 +274,8 @@ impl GraphicsPipeline {
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::FRAGMENT)
                 .module(fragment.raw)
-                .name(c"main"),
+                .name(c"main")
+                .specialization_info(&specialization),
         ];
         let binding = vk::VertexInputBindingDescription::default()
             .binding(0)

@@ -17,6 +17,9 @@ use crate::{Error, Result};
 /// The header of an RGB table, exactly as SPEC §3 writes it.
 pub const RGB_HEADER: &str = "angle_deg,r,g,b";
 
+/// The largest Fresnel CSV read (16 MiB): a table at every 0.01° is 9001 rows.
+pub const MAX_FRESNEL_CSV_BYTES: u64 = 16 << 20;
+
 /// n(λ) = A + B/λ² of the default lacquer (SPEC §3): A = 1.500, B = 0.0045 µm², n ≈ 1.51 at 589 nm.
 pub const DEFAULT_IOR_A: f64 = 1.5;
 /// See [`DEFAULT_IOR_A`].
@@ -41,11 +44,10 @@ impl FresnelTable {
     }
 
     /// Reads a CSV file and parses it with [`FresnelTable::from_csv_str`]; errors name the file.
+    /// Files above [`MAX_FRESNEL_CSV_BYTES`] are refused before reading.
     pub fn from_csv_file(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text =
+            super::material_file::read_text_file(path, MAX_FRESNEL_CSV_BYTES, "Fresnel CSV")?;
         Self::from_csv_str(&text, &path.display().to_string())
     }
 

@@ -2,21 +2,29 @@
 //! lit by point/directional lights and the prefiltered environment, over a background (the sharp
 //! environment, a colour, or transparent), resolved (MSAA) and read back as an [`HdrImage`].
 //!
-//! Per draw: upload mesh, uniforms and Fresnel knots → transition targets → background pass →
-//! mesh pass → resolve → copy to a readback buffer → barrier to host. Pipelines, the sampler and
-//! the black stand-in environment are made once and kept.
+//! Per draw: write uniforms and Fresnel knots → transition targets → background pass → mesh pass
+//! → resolve → copy to a readback buffer → barrier to host. Kept between draws: each pipeline
+//! (built on first use, so a command builds only the ones it draws with), the sampler, the black
+//! stand-in environment, the render targets and readback buffer of the last size
+//! (`draw_targets.rs`) and each object slot's uniform and knot buffers. Meshes are uploaded per
+//! draw by [`LacquerRenderer::render`]; callers that draw the same mesh again (the scene renderer)
+//! upload a [`GpuMesh`] once and use [`LacquerRenderer::render_meshes`].
 
-use crate::environment::gpu::{GpuEnvironment, GpuPrefilter};
+use crate::environment::gpu::GpuEnvironment;
 use crate::environment::params::ViewBlur;
-use crate::environment::{Equirect, PrefilterParams};
+use crate::environment::{CubeImage, PrefilteredEnvironment};
 use crate::gpu::{
-    Access, Binding, BindingKind, Buffer, BufferDesc, BufferUsage, DescriptorSet, Format,
-    GpuContext, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageUse, Layout,
-    RenderTargets, Resource, Sampler, VertexAttribute,
+    Binding, BindingKind, Buffer, BufferUsage, DescriptorSet, Format, GpuContext, GraphicsPipeline,
+    GraphicsPipelineDesc, Image, Resource, Sampler, TimestampPool,
 };
 use crate::model::{BrdfParams, FresnelTable};
 use crate::output::HdrImage;
 use crate::raster::camera::Camera;
+use crate::raster::draw_record::{
+    record_and_submit, timings_from, RecordedDraw, Strip, TIMESTAMPS,
+};
+use crate::raster::draw_targets::TargetCache;
+use crate::raster::gpu_mesh::{upload, GpuMesh, VERTEX_ATTRIBUTES, VERTEX_STRIDE};
 use crate::raster::lights::{Light, MAX_LIGHTS};
 use crate::raster::mesh::Mesh;
 use crate::shading::{self, EnvironmentUniforms, FrameUniforms, MAX_ENV_LAYERS};
@@ -83,33 +91,64 @@ const BINDINGS: [Binding; 4] = [
     Binding::new(3, BindingKind::SampledImage),
 ];
 
-/// Interleaved position (xyz) + normal (xyz), f32.
-const VERTEX_STRIDE: u32 = 24;
-const VERTEX_ATTRIBUTES: [VertexAttribute; 2] = [
-    VertexAttribute {
-        location: 0,
-        offset: 0,
-        components: 3,
-    },
-    VertexAttribute {
-        location: 1,
-        offset: 12,
-        components: 3,
-    },
-];
-
-/// The two pipelines of one sample count.
-struct Pipelines {
-    lacquer: GraphicsPipeline,
-    background: GraphicsPipeline,
+/// The fragment shader of the mesh pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum MeshShading {
+    /// lacquer.frag: the model (every real render).
+    #[default]
+    Lacquer,
+    /// trivial.frag: a constant colour, the rasteriser's floor for the same geometry (benchmarks).
+    Trivial,
 }
 
-/// The lacquer raster renderer; keeps its pipelines between draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum PipelineKind {
+    Mesh(MeshShading),
+    Background,
+}
+
+/// GPU time of one draw's passes from timestamp queries, in seconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DrawTimings {
+    /// The rendering pass: background (if any), mesh draws, the end of the pass and the MSAA
+    /// resolve.
+    pub pass: f64,
+    /// Resolved image → readback buffer.
+    pub copy_out: f64,
+    /// From the first command to the last.
+    pub total: f64,
+}
+
+/// How [`LacquerRenderer::render_meshes`] draws.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DrawOptions {
+    pub shading: MeshShading,
+    /// Record timestamp queries and return [`DrawTimings`].
+    pub timed: bool,
+}
+
+/// The per-object buffers of one draw slot, rewritten by every draw (the previous draw has
+/// finished: `submit_and_wait` waits on its fence before returning).
+struct ObjectSlot {
+    frame: Buffer,
+    knots: Buffer,
+}
+
+/// Fresnel tables up to this many knots fit a slot's first knot buffer (the built-in tables have
+/// 91); a longer table replaces it with a bigger one.
+const SLOT_KNOTS: usize = 128;
+
+/// The lacquer raster renderer; keeps its pipelines, targets and buffers between draws.
 #[derive(Default)]
 pub struct LacquerRenderer {
-    pipelines: HashMap<u32, Pipelines>,
+    /// Keyed by kind, MSAA samples and the environment's layer count K (a specialization constant).
+    pipelines: HashMap<(PipelineKind, u32, u32), GraphicsPipeline>,
     sampler: Option<Sampler>,
     black_environment: Option<GpuEnvironment>,
+    targets: TargetCache,
+    /// Slot 0 is the background pass; slot i + 1 is object i.
+    slots: Vec<ObjectSlot>,
+    timestamps: Option<TimestampPool>,
 }
 
 impl LacquerRenderer {
@@ -117,69 +156,78 @@ impl LacquerRenderer {
         Self::default()
     }
 
-    fn ensure_pipelines(&mut self, gpu: &GpuContext, samples: u32) -> Result<()> {
-        match self.pipelines.entry(samples) {
-            Entry::Occupied(_) => Ok(()),
-            Entry::Vacant(entry) => {
-                use crate::gpu::shaders::*;
-                let desc = |name, vertex_spirv, fragment_spirv, attributes, depth_test| {
-                    GraphicsPipelineDesc {
-                        name,
-                        vertex_spirv,
-                        fragment_spirv,
-                        bindings: &BINDINGS,
-                        vertex_stride: VERTEX_STRIDE,
-                        vertex_attributes: attributes,
-                        color_format: Format::Rgba32Float,
-                        depth_format: Format::Depth32Float,
-                        samples,
-                        depth_test,
-                    }
-                };
-                let lacquer = gpu.create_graphics_pipeline(&desc(
-                    "lacquer",
-                    MESH_VERT,
-                    LACQUER_FRAG,
-                    &VERTEX_ATTRIBUTES,
-                    true,
-                ))?;
-                let background = gpu.create_graphics_pipeline(&desc(
-                    "background",
-                    BACKGROUND_VERT,
-                    BACKGROUND_FRAG,
-                    &[],
-                    false,
-                ))?;
-                entry.insert(Pipelines {
-                    lacquer,
-                    background,
-                });
-                Ok(())
-            }
-        }
+    /// Tests draw small images in many strips with a tiny colour-target budget.
+    #[cfg(test)]
+    pub(crate) fn set_color_target_budget(&mut self, bytes: u64) {
+        self.targets.color_budget = bytes;
     }
 
-    /// Made once: the sampler and a black environment bound when a draw has none (every binding
-    /// the shaders declare must hold a valid descriptor).
-    fn prepare_shared(&mut self, gpu: &GpuContext) -> Result<()> {
+    fn ensure_pipeline(
+        &mut self,
+        gpu: &GpuContext,
+        kind: PipelineKind,
+        samples: u32,
+        layer_count: u32,
+    ) -> Result<()> {
+        if let Entry::Vacant(entry) = self.pipelines.entry((kind, samples, layer_count)) {
+            use crate::gpu::shaders::*;
+            let (name, vertex_spirv, fragment_spirv, attributes, depth_test): (_, _, _, &[_], _) =
+                match kind {
+                    PipelineKind::Mesh(MeshShading::Lacquer) => {
+                        ("lacquer", MESH_VERT, LACQUER_FRAG, &VERTEX_ATTRIBUTES, true)
+                    }
+                    PipelineKind::Mesh(MeshShading::Trivial) => {
+                        ("trivial", MESH_VERT, TRIVIAL_FRAG, &VERTEX_ATTRIBUTES, true)
+                    }
+                    PipelineKind::Background => {
+                        ("background", BACKGROUND_VERT, BACKGROUND_FRAG, &[], false)
+                    }
+                };
+            entry.insert(gpu.create_graphics_pipeline(&GraphicsPipelineDesc {
+                name,
+                vertex_spirv,
+                fragment_spirv,
+                bindings: &BINDINGS,
+                vertex_stride: VERTEX_STRIDE,
+                vertex_attributes: attributes,
+                color_format: Format::Rgba32Float,
+                depth_format: Format::Depth32Float,
+                samples,
+                depth_test,
+                // frame.glsl's ENV_LAYER_COUNT: a sampler array may only be indexed by constants
+                // on lavapipe, and a constant K lets the shader skip the absent layers.
+                fragment_constants: &[layer_count],
+            })?);
+        }
+        Ok(())
+    }
+
+    /// Made once: the sampler, and the black environment bound only when a draw has none (every
+    /// binding the shaders declare must hold a valid descriptor).
+    fn prepare_shared(&mut self, gpu: &GpuContext, needs_black: bool) -> Result<()> {
         if self.sampler.is_none() {
             self.sampler = Some(gpu.create_sampler()?);
         }
-        if self.black_environment.is_none() {
-            let black = Equirect::constant(2, 1, [0.0; 3]);
-            let params = PrefilterParams {
-                face_size: crate::environment::params::MIN_LAYER_FACE,
-                layers: 2,
-                beta_min: 1.0,
-                beta_max: 1.0,
+        if needs_black && self.black_environment.is_none() {
+            // Uploaded, not prefiltered: a context that never sees an environment builds no
+            // prefilter pipelines.
+            let face = crate::environment::params::MIN_LAYER_FACE;
+            let black = || CubeImage {
+                face_size: face,
+                texels: vec![[0.0, 0.0, 0.0, 1.0]; 6 * (face as usize).pow(2)],
             };
-            let env = GpuPrefilter::new(gpu)?.run(gpu, &black, &params, 1.0, 0.0)?;
-            self.black_environment = Some(env);
+            let env = PrefilteredEnvironment {
+                betas: vec![0.0, 1.0],
+                layers: vec![black(), black()],
+                irradiance: black(),
+            };
+            self.black_environment = Some(GpuEnvironment::upload(gpu, &env)?);
         }
         Ok(())
     }
 
     /// Renders `scene` and reads the image back (linear radiance, alpha = coverage, row 0 top).
+    /// Uploads each object's mesh for this draw.
     pub fn render(
         &mut self,
         gpu: &GpuContext,
@@ -187,41 +235,244 @@ impl LacquerRenderer {
         settings: &RenderSettings,
     ) -> Result<HdrImage> {
         validate(gpu, scene, settings)?;
-        self.prepare_shared(gpu)?;
-        self.ensure_pipelines(gpu, settings.samples)?;
+        let meshes: Vec<GpuMesh> = scene
+            .objects
+            .iter()
+            .map(|o| GpuMesh::upload(gpu, o.mesh))
+            .collect::<Result<_>>()?;
+        let meshes: Vec<&GpuMesh> = meshes.iter().collect();
+        let (image, _) = self.draw(gpu, scene, &meshes, settings, DrawOptions::default())?;
+        Ok(image)
+    }
+
+    /// [`render`](Self::render) with each object's mesh already on the device: `meshes[i]` must
+    /// be the upload of `scene.objects[i].mesh`. Returns the pass timings with `options.timed`.
+    pub fn render_meshes(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &DrawScene<'_>,
+        meshes: &[&GpuMesh],
+        settings: &RenderSettings,
+        options: DrawOptions,
+    ) -> Result<(HdrImage, Option<DrawTimings>)> {
+        validate(gpu, scene, settings)?;
+        if meshes.len() != scene.objects.len() {
+            return Err(Error::invalid(
+                "meshes",
+                meshes.len(),
+                format!("one GPU mesh per object ({} objects)", scene.objects.len()),
+            ));
+        }
+        self.draw(gpu, scene, meshes, settings, options)
+    }
+
+    fn draw(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &DrawScene<'_>,
+        meshes: &[&GpuMesh],
+        settings: &RenderSettings,
+        options: DrawOptions,
+    ) -> Result<(HdrImage, Option<DrawTimings>)> {
+        let samples = settings.samples;
+        let with_background = scene.background == Background::Environment;
+        self.prepare_shared(gpu, scene.environment.is_none())?;
         let internal = || Error::invalid("renderer", "uninitialised", "internal error");
-        let pipelines = self.pipelines.get(&settings.samples).ok_or_else(internal)?;
+        let layer_count = match scene.environment {
+            Some(env) => env.layers.len(),
+            None => self
+                .black_environment
+                .as_ref()
+                .ok_or_else(internal)?
+                .layers
+                .len(),
+        } as u32;
+        let mesh_kind = PipelineKind::Mesh(options.shading);
+        self.ensure_pipeline(gpu, mesh_kind, samples, layer_count)?;
+        if with_background {
+            self.ensure_pipeline(gpu, PipelineKind::Background, samples, layer_count)?;
+        }
+        if options.timed && self.timestamps.is_none() {
+            self.timestamps = Some(gpu.create_timestamp_pool(TIMESTAMPS)?);
+        }
+        let mut background_frame = self.write_slots(gpu, scene, settings)?;
+        let environment = match scene.environment {
+            Some(env) => env,
+            None => self.black_environment.as_ref().ok_or_else(internal)?,
+        };
         let sampler = self.sampler.as_ref().ok_or_else(internal)?;
-        let black = self.black_environment.as_ref().ok_or_else(internal)?;
-        let environment = scene.environment.unwrap_or(black);
-        draw(gpu, pipelines, sampler, environment, scene, settings)
+        let pipeline = |kind| {
+            self.pipelines
+                .get(&(kind, samples, layer_count))
+                .ok_or_else(internal)
+        };
+        let mesh_pipeline = pipeline(mesh_kind)?;
+        // Descriptor sets name the environment's images, which may differ from the last draw's;
+        // they are cheap (one small pool each), so they are made per draw.
+        let bind = |pipeline: &GraphicsPipeline, slot: &ObjectSlot| {
+            bind_set(gpu, pipeline, slot, environment, sampler)
+        };
+        let background = match with_background {
+            true => {
+                let p = pipeline(PipelineKind::Background)?;
+                Some((p, bind(p, &self.slots[0])?))
+            }
+            false => None,
+        };
+        let object_sets: Vec<DescriptorSet> = self.slots[1..=meshes.len()]
+            .iter()
+            .map(|slot| bind(mesh_pipeline, slot))
+            .collect::<Result<_>>()?;
+        let stamps = if options.timed {
+            self.timestamps.as_ref()
+        } else {
+            None
+        };
+        let targets = self
+            .targets
+            .get(gpu, (settings.width, settings.height, samples))?;
+        let objects: Vec<(&GpuMesh, &DescriptorSet)> =
+            meshes.iter().copied().zip(&object_sets).collect();
+        let clear_color = match scene.background {
+            Background::Transparent | Background::Environment => [0.0; 4],
+            Background::Color([r, g, b]) => [r, g, b, 1.0],
+        };
+        let mut timings: Option<DrawTimings> = stamps.map(|_| DrawTimings::default());
+        let mut first_row = 0;
+        while first_row < settings.height {
+            let rows = targets.strip_rows.min(settings.height - first_row);
+            if with_background {
+                // The previous strip's submit has finished (submit_and_wait), so slot 0's
+                // uniforms can be rewritten for this one.
+                background_frame.strip_offset[1] = first_row as f32;
+                self.slots[0]
+                    .frame
+                    .write(std::slice::from_ref(&background_frame))?;
+            }
+            let recorded = RecordedDraw {
+                targets,
+                strip: Strip {
+                    first_row,
+                    rows,
+                    image_width: settings.width,
+                    image_height: settings.height,
+                },
+                background: background.as_ref().map(|(p, s)| (*p, s)),
+                mesh_pipeline,
+                objects: objects.clone(),
+                clear_color,
+                stamps,
+            };
+            record_and_submit(gpu, &recorded)?;
+            targets.used = true;
+            if let (Some(pool), Some(sum)) = (stamps, timings.as_mut()) {
+                let t = timings_from(&pool.read_ns(TIMESTAMPS)?);
+                sum.pass += t.pass;
+                sum.copy_out += t.copy_out;
+                sum.total += t.total;
+            }
+            first_row += rows;
+        }
+        let pixels: Vec<[f32; 4]> = targets.readback.read()?;
+        let image = HdrImage {
+            width: settings.width,
+            height: settings.height,
+            pixels,
+        };
+        Ok((image, timings))
+    }
+
+    /// Writes the frame uniforms and knots of the background (slot 0) and of every object.
+    fn write_slots(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &DrawScene<'_>,
+        settings: &RenderSettings,
+    ) -> Result<FrameUniforms> {
+        let environment_betas = match scene.environment {
+            Some(env) => env.betas.clone(),
+            None => self
+                .black_environment
+                .as_ref()
+                .map(|e| e.betas.clone())
+                .unwrap_or_default(),
+        };
+        let scene_radius = scene
+            .objects
+            .iter()
+            .map(|o| o.mesh.bounding_radius())
+            .fold(0.0, f64::max);
+        let uniforms = |brdf: &BrdfParams, fresnel: &FresnelTable, view_blur: ViewBlur| {
+            FrameUniforms::new(
+                scene.camera,
+                settings.width,
+                settings.height,
+                scene_radius,
+                scene.lights,
+                brdf,
+                fresnel,
+                &EnvironmentUniforms {
+                    enabled: scene.environment.is_some(),
+                    layer_betas: environment_betas.clone(),
+                    view_blur,
+                },
+            )
+        };
+        // The background pass needs only the camera and the environment: the uniforms of any
+        // material will do (a default one when the scene has no object).
+        let default_brdf;
+        let default_fresnel;
+        let (brdf, fresnel) = match scene.objects.first() {
+            Some(o) => (o.brdf, o.fresnel),
+            None => {
+                default_brdf = crate::model::LacquerMaterial::default().brdf_params()?;
+                default_fresnel = FresnelTable::new(vec![0.0, 90.0], vec![[0.0; 3], [1.0; 3]])?;
+                (&default_brdf, &default_fresnel)
+            }
+        };
+        let mut contents = vec![(uniforms(brdf, fresnel, ViewBlur::default()), fresnel)];
+        for object in scene.objects {
+            contents.push((
+                uniforms(object.brdf, object.fresnel, object.view_blur),
+                object.fresnel,
+            ));
+        }
+        for (i, (frame, fresnel)) in contents.iter().enumerate() {
+            let knots = shading::fresnel_knots(fresnel);
+            let fits = |slot: &ObjectSlot| slot.knots.size() as usize >= knots.len() * 16;
+            if self.slots.get(i).is_some_and(|slot| !fits(slot)) {
+                self.slots.truncate(i);
+            }
+            if self.slots.len() <= i {
+                let capacity = vec![[0.0f32; 4]; knots.len().max(SLOT_KNOTS)];
+                self.slots.insert(
+                    i,
+                    ObjectSlot {
+                        frame: upload(
+                            gpu,
+                            "frame uniforms",
+                            std::slice::from_ref(frame),
+                            BufferUsage::UNIFORM,
+                        )?,
+                        knots: upload(gpu, "fresnel knots", &capacity, BufferUsage::STORAGE)?,
+                    },
+                );
+            }
+            let slot = &mut self.slots[i];
+            slot.frame.write(std::slice::from_ref(frame))?;
+            slot.knots.write(&knots)?;
+        }
+        Ok(contents[0].0)
     }
 }
 
-/// The GPU resources of one object for one draw.
-struct ObjectResources {
-    vertices: Buffer,
-    indices: Buffer,
-    index_count: u32,
-    lacquer_set: DescriptorSet,
-    // Bound through `lacquer_set`; kept alive until the submit has finished.
-    _frame: Buffer,
-    _knots: Buffer,
-}
-
-fn draw(
+fn bind_set(
     gpu: &GpuContext,
-    pipelines: &Pipelines,
-    sampler: &Sampler,
+    pipeline: &GraphicsPipeline,
+    slot: &ObjectSlot,
     environment: &GpuEnvironment,
-    scene: &DrawScene<'_>,
-    settings: &RenderSettings,
-) -> Result<HdrImage> {
-    let RenderSettings {
-        width,
-        height,
-        samples,
-    } = *settings;
+    sampler: &Sampler,
+) -> Result<DescriptorSet> {
     // Unused array slots repeat the last layer: every element needs a valid descriptor.
     let mut layer_images: Vec<&Image> = environment.layers.iter().collect();
     while layer_images.len() < MAX_ENV_LAYERS {
@@ -229,179 +480,16 @@ fn draw(
         layer_images.push(last);
     }
     layer_images.truncate(MAX_ENV_LAYERS);
-    let scene_radius = scene
-        .objects
-        .iter()
-        .map(|o| o.mesh.bounding_radius())
-        .fold(0.0, f64::max);
-    let uniforms = |object: &DrawObject<'_>| {
-        FrameUniforms::new(
-            scene.camera,
-            width,
-            height,
-            scene_radius,
-            scene.lights,
-            object.brdf,
-            object.fresnel,
-            &EnvironmentUniforms {
-                enabled: scene.environment.is_some(),
-                layer_betas: environment.betas.clone(),
-                view_blur: object.view_blur,
-            },
-        )
-    };
-    let bind = |layout, frame: &Buffer, knots: &Buffer| {
-        gpu.create_descriptor_set(
-            layout,
-            &[
-                (0, Resource::Buffer(frame)),
-                (1, Resource::Buffer(knots)),
-                (2, Resource::SampledImages(layer_images.clone(), sampler)),
-                (3, Resource::SampledImage(&environment.irradiance, sampler)),
-            ],
-        )
-    };
-
-    let mut objects = Vec::with_capacity(scene.objects.len());
-    for object in scene.objects {
-        let vertices: Vec<[f32; 6]> = object
-            .mesh
-            .positions
-            .iter()
-            .zip(&object.mesh.normals)
-            .map(|(p, n)| [p[0], p[1], p[2], n[0], n[1], n[2]])
-            .collect();
-        let vertices = upload(gpu, "mesh vertices", &vertices, BufferUsage::VERTEX)?;
-        let indices = upload(
-            gpu,
-            "mesh indices",
-            &object.mesh.indices,
-            BufferUsage::INDEX,
-        )?;
-        let frame = upload(
-            gpu,
-            "frame uniforms",
-            std::slice::from_ref(&uniforms(object)),
-            BufferUsage::UNIFORM,
-        )?;
-        let knots = shading::fresnel_knots(object.fresnel);
-        let knots = upload(gpu, "fresnel knots", &knots, BufferUsage::STORAGE)?;
-        let lacquer_set = bind(pipelines.lacquer.layout(), &frame, &knots)?;
-        objects.push(ObjectResources {
-            vertices,
-            indices,
-            index_count: object.mesh.indices.len() as u32,
-            lacquer_set,
-            _frame: frame,
-            _knots: knots,
-        });
-    }
-    // The background pass needs only the camera and the environment: the uniforms of any
-    // material will do (a default one when the scene has no object).
-    let default_brdf = crate::model::LacquerMaterial::default().brdf_params()?;
-    let default_fresnel =
-        crate::model::FresnelTable::new(vec![0.0, 90.0], vec![[0.0; 3], [1.0; 3]])?;
-    let background_object = DrawObject {
-        mesh: scene.objects.first().map_or(&EMPTY_MESH, |o| o.mesh),
-        brdf: scene.objects.first().map_or(&default_brdf, |o| o.brdf),
-        fresnel: scene
-            .objects
-            .first()
-            .map_or(&default_fresnel, |o| o.fresnel),
-        view_blur: ViewBlur::default(),
-    };
-    let background_frame = upload(
-        gpu,
-        "background uniforms",
-        std::slice::from_ref(&uniforms(&background_object)),
-        BufferUsage::UNIFORM,
-    )?;
-    let background_knots = upload(
-        gpu,
-        "background knots",
-        &shading::fresnel_knots(background_object.fresnel),
-        BufferUsage::STORAGE,
-    )?;
-    let background_set = bind(
-        pipelines.background.layout(),
-        &background_frame,
-        &background_knots,
-    )?;
-
-    let color = gpu.create_image(ImageDesc::color_target("color", width, height, samples))?;
-    let resolve = if samples > 1 {
-        Some(gpu.create_image(ImageDesc::color_target("resolve", width, height, 1))?)
-    } else {
-        None
-    };
-    let depth = gpu.create_image(ImageDesc::depth_target("depth", width, height, samples))?;
-    let output = resolve.as_ref().unwrap_or(&color);
-    let readback = gpu.create_buffer(BufferDesc::readback("readback", output.byte_size()))?;
-
-    let clear_color = match scene.background {
-        Background::Transparent | Background::Environment => [0.0, 0.0, 0.0, 0.0],
-        Background::Color([r, g, b]) => [r, g, b, 1.0],
-    };
-    let undefined = ImageUse::new(Access::Nothing, Layout::Undefined);
-    let color_attachment = ImageUse::new(Access::ColorAttachmentWrite, Layout::ColorAttachment);
-    let depth_attachment = ImageUse::new(Access::DepthAttachmentWrite, Layout::DepthAttachment);
-    let transfer_src = ImageUse::new(Access::TransferRead, Layout::TransferSrc);
-    gpu.submit_and_wait(|rec| {
-        rec.image_barrier(&color, undefined, color_attachment);
-        if let Some(resolve) = &resolve {
-            rec.image_barrier(resolve, undefined, color_attachment);
-        }
-        rec.image_barrier(&depth, undefined, depth_attachment);
-        rec.begin_rendering(&RenderTargets {
-            color: &color,
-            resolve: resolve.as_ref(),
-            depth: &depth,
-            clear_color,
-        });
-        if scene.background == Background::Environment {
-            rec.bind_graphics(&pipelines.background, &background_set);
-            rec.draw(3);
-        }
-        for object in &objects {
-            rec.bind_graphics(&pipelines.lacquer, &object.lacquer_set);
-            rec.bind_mesh_buffers(&object.vertices, &object.indices);
-            rec.draw_indexed(object.index_count);
-        }
-        rec.end_rendering();
-        rec.image_barrier(output, color_attachment, transfer_src);
-        rec.copy_image_to_buffer(output, &readback);
-        rec.memory_barrier(Access::TransferWrite, Access::HostRead);
-        Ok(())
-    })?;
-    let pixels: Vec<[f32; 4]> = readback.read()?;
-    Ok(HdrImage {
-        width,
-        height,
-        pixels,
-    })
+    Ok(gpu.create_descriptor_set(
+        pipeline.layout(),
+        &[
+            (0, Resource::Buffer(&slot.frame)),
+            (1, Resource::Buffer(&slot.knots)),
+            (2, Resource::SampledImages(layer_images, sampler)),
+            (3, Resource::SampledImage(&environment.irradiance, sampler)),
+        ],
+    )?)
 }
-
-/// A mapped buffer holding `data`.
-fn upload<T: bytemuck::Pod>(
-    gpu: &GpuContext,
-    name: &str,
-    data: &[T],
-    usage: BufferUsage,
-) -> Result<Buffer> {
-    let mut buffer = gpu.create_buffer(BufferDesc::upload(
-        name,
-        std::mem::size_of_val(data) as u64,
-        usage,
-    ))?;
-    buffer.write(data)?;
-    Ok(buffer)
-}
-
-static EMPTY_MESH: Mesh = Mesh {
-    positions: Vec::new(),
-    normals: Vec::new(),
-    indices: Vec::new(),
-};
 
 fn validate(gpu: &GpuContext, scene: &DrawScene<'_>, settings: &RenderSettings) -> Result<()> {
     let max = gpu.info().max_image_dimension_2d;

@@ -16,7 +16,7 @@ use super::{EnvironmentSpec, MeshSource, OutputSpec, Scene, SceneObject};
 use crate::environment::load::BUILTIN_STUDIO;
 use crate::model::fresnel::FresnelTable;
 use crate::model::material::MATERIAL_KEYS;
-use crate::model::material_file::load_material_file;
+use crate::model::material_file::{load_material_file, read_text_file};
 use crate::model::LacquerMaterial;
 use crate::output::OutputFormat;
 use crate::raster::lights::{default_lights, MAX_LIGHTS};
@@ -24,6 +24,9 @@ use crate::raster::mesh::{BuiltinMesh, Mesh};
 use crate::raster::mesh_io::load_mesh;
 use crate::raster::Camera;
 use crate::{Error, Result};
+
+/// The largest scene file read (16 MiB): hand-written scenes are a few KiB.
+pub const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
 
 const TOP_KEYS: &[&str] = &["camera", "object", "light", "environment", "output"];
 const CAMERA_KEYS: &[&str] = &["eye", "target", "up", "fov_deg", "orbit_deg"];
@@ -62,12 +65,10 @@ impl SceneDocument {
         })
     }
 
-    /// Reads a scene file; relative paths in it resolve against its directory.
+    /// Reads a scene file (at most [`MAX_SCENE_FILE_BYTES`]); relative paths in it resolve against
+    /// its directory.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = read_text_file(path, MAX_SCENE_FILE_BYTES, "scene")?;
         let base_dir = path.parent().unwrap_or(Path::new(""));
         Self::parse(&text, &path.display().to_string(), base_dir)
     }

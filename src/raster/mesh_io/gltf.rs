@@ -23,8 +23,8 @@ use ::gltf::{Accessor, Document, Gltf, Node, Primitive};
 use glam::{DMat4, DVec3};
 
 use super::{
-    content_error, gltf_buffers, mirrors, reverse_winding, transform_normal, LoadReport,
-    MeshBuilder, Part, MAX_TRIANGLES, MAX_VERTICES,
+    check_file_length, content_error, gltf_buffers, mirrors, reverse_winding, transform_normal,
+    LoadReport, MeshBuilder, Part, MAX_TRIANGLES, MAX_VERTICES,
 };
 use crate::raster::mesh::Mesh;
 use crate::{Error, Result};
@@ -39,6 +39,7 @@ struct Instance<'a> {
 }
 
 pub(super) fn load(path: &Path) -> Result<(Mesh, LoadReport)> {
+    check_file_length(path).map_err(|message| content_error(path, message))?;
     let bytes = std::fs::read(path).map_err(|source| Error::Read {
         path: path.to_path_buf(),
         source,

@@ -10,7 +10,7 @@ use std::path::Path;
 use ::gltf::buffer::Source;
 use ::gltf::Document;
 
-use super::content_error;
+use super::{check_file_length, content_error};
 use crate::Result;
 
 const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -121,6 +121,7 @@ fn read_uri(base: &Path, uri: &str) -> std::result::Result<Vec<u8>, String> {
         _ => percent_decode(uri)?,
     };
     let file = base.join(relative);
+    check_file_length(&file).map_err(|e| format!("{e} (URI {uri:?})"))?;
     std::fs::read(&file).map_err(|e| format!("cannot read {} (URI {uri:?}): {e}", file.display()))
 }
 

@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use crate::output::atomic::write_atomically;
+use super::sink::{write_file, OutputSink};
 use crate::Result;
 
 /// The status of a job that finished and wrote its output.
@@ -75,8 +75,9 @@ impl Manifest {
         out
     }
 
-    pub fn save(&self) -> Result<()> {
-        write_atomically(&self.path, self.to_csv().as_bytes())
+    /// Writes the CSV atomically through `sink` ([`super::sink`]).
+    pub fn save(&self, sink: &dyn OutputSink) -> Result<()> {
+        write_file(sink, &self.path, self.to_csv().as_bytes())
     }
 }
 

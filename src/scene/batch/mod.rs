@@ -9,25 +9,32 @@
 //! ```
 //!
 //! Owns the plan (jobs, their ids, names and shards); [`run`] owns execution, [`manifest`] the CSV
-//! record and resume rule, [`sheet`] the contact sheet. Rendering itself is [`super::SceneRenderer`].
+//! record and resume rule, [`sheet`] the contact sheet, [`sink`] the atomic file writes. Rendering itself is [`super::SceneRenderer`].
 
 pub mod manifest;
 pub mod run;
 pub mod sheet;
+pub mod sink;
 
 use std::path::Path;
 
 use sha2::{Digest, Sha256};
 
 use super::doc::{self, Node, Origin, Value};
-use super::parse::{table_get, SceneDocument};
+use super::parse::{table_get, SceneDocument, MAX_SCENE_FILE_BYTES};
 use super::Scene;
+use crate::model::material_file::read_text_file;
 use crate::output::OutputFormat;
-use crate::{Error, Result};
+use crate::Result;
 
 pub use run::{run_batch, BatchOptions, BatchSummary};
+pub use sink::{FileSystem, OutputSink};
 
 const JOBS_KEYS: &[&str] = &["scene", "name", "sweep"];
+/// The most jobs one jobs file may describe (the product of its sweeps' lengths): a million
+/// images is days of rendering, and a typo such as a 10⁴-value sweep × three more sweeps must
+/// fail at once rather than overflow or allocate a job list of gigabytes.
+pub const MAX_BATCH_JOBS: usize = 1_000_000;
 /// Used when the jobs file has no `name`.
 pub const DEFAULT_NAME_TEMPLATE: &str = "job-{job}";
 
@@ -67,12 +74,10 @@ pub struct PreparedJob {
 }
 
 impl BatchPlan {
-    /// Reads a jobs file; the base scene's relative paths resolve against the file naming them.
+    /// Reads a jobs file (at most [`MAX_SCENE_FILE_BYTES`]); the base scene's relative paths
+    /// resolve against the file naming them.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = read_text_file(path, MAX_SCENE_FILE_BYTES, "jobs")?;
         let base_dir = path.parent().unwrap_or(Path::new(""));
         Self::parse(&text, &path.display().to_string(), base_dir)
     }
@@ -115,7 +120,9 @@ impl BatchPlan {
             },
         };
         let mut sweeps = Vec::new();
+        let mut sweep_at = root.at.clone();
         if let Some(sweep) = table_get(&root, "sweep") {
+            sweep_at = sweep.at.clone();
             let Value::Table(entries) = &sweep.value else {
                 return Err(sweep.at.error("[sweep] must be a table of path = [values]"));
             };
@@ -133,6 +140,18 @@ impl BatchPlan {
                     }
                 }
             }
+        }
+        let count = sweeps
+            .iter()
+            .try_fold(1usize, |n, s| n.checked_mul(s.values.len()))
+            .filter(|&n| n <= MAX_BATCH_JOBS);
+        if count.is_none() {
+            let lengths: Vec<String> = sweeps.iter().map(|s| s.values.len().to_string()).collect();
+            return Err(sweep_at.error(format!(
+                "the sweeps make {} jobs, more than the {MAX_BATCH_JOBS} one jobs file may hold; \
+                 split the sweep into several jobs files",
+                lengths.join(" × ")
+            )));
         }
         let plan = BatchPlan {
             base,
@@ -248,19 +267,14 @@ impl BatchPlan {
     }
 
     fn check_template(&self) -> Result<()> {
-        let names: Vec<String> = self
-            .jobs()
-            .iter()
-            .take(1)
-            .map(|job| self.file_name(job, OutputFormat::Png))
-            .collect::<Result<_>>()?;
+        let first = self.file_name(&self.job(0), OutputFormat::Png)?;
         if self.job_count() > 1 && !self.name_template.contains('{') {
             return Err(self.name_at.error(format!(
                 "`name` = {:?} has no placeholder, so all {} jobs would write {}; add {{job}} or \
                  a swept field such as {{{}}}",
                 self.name_template,
                 self.job_count(),
-                names.first().map_or("", String::as_str),
+                first,
                 self.sweeps.first().map_or("job", |s| s.path.as_str())
             )));
         }
@@ -394,6 +408,19 @@ mod tests {
         unique.sort();
         unique.dedup();
         assert_eq!(unique.len(), 6);
+    }
+
+    #[test]
+    fn too_many_jobs_are_rejected_before_any_is_listed() {
+        let values: Vec<String> = (0..1000).map(|k| k.to_string()).collect();
+        let list = format!("[{}]", values.join(", "));
+        let text = format!(
+            "[scene]\n[[scene.object]]\nmesh = \"builtin:sphere\"\n[sweep]\n\
+             \"camera.orbit_deg\" = {list}\n\"object.0.material.r\" = {list}\n\
+             \"camera.fov_deg\" = {list}\n"
+        );
+        let err = BatchPlan::parse(&text, "jobs.toml", Path::new(".")).unwrap_err();
+        assert!(err.to_string().contains("1000 × 1000 × 1000 jobs"), "{err}");
     }
 
     #[test]

@@ -3,17 +3,25 @@
 //! records the manifest and keeps the contact-sheet tile, so encoding overlaps the next render.
 //!
 //! A failed job is reported, recorded (`failed: …` in the manifest, a red tile) and leaves no
-//! output file; the run continues and [`BatchSummary::failed`] makes the exit code non-zero.
+//! output file; the run continues and [`BatchSummary::failed`] makes the exit code non-zero. That
+//! includes a job whose file cannot be written (a full disk, a directory in the way): every file
+//! goes through [`super::sink`], atomically.
+//!
+//! Cancellation ([`BatchOptions::cancel`], set by the CLI's SIGINT handler): the render thread
+//! takes no new job, the writer finishes the images already rendered, and the manifest and
+//! contact sheet describe what finished, so the same command resumes.
 
 use std::collections::BTreeMap;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::mpsc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::manifest::{self, Manifest, ManifestRow, STATUS_OK};
 use super::sheet::{contact_sheet_png, Thumbnail, Tile};
+use super::sink::{self, FileSystem, OutputSink};
 use super::{in_shard, BatchPlan, JobSpec, PreparedJob};
 use crate::gpu::GpuContext;
 use crate::output::{self, HdrImage, OutputFormat, PngSettings};
@@ -34,6 +42,25 @@ pub struct BatchOptions {
     pub force: bool,
     /// Show the progress bar (only drawn when stderr is a terminal).
     pub progress: bool,
+    /// Set it (from any thread or a signal handler) to stop after the image in flight; the run
+    /// then returns normally with [`BatchSummary::cancelled`].
+    pub cancel: Arc<AtomicBool>,
+    /// Where every file is written: [`FileSystem`], unless a caller injects failures.
+    pub sink: Arc<dyn OutputSink>,
+}
+
+impl BatchOptions {
+    /// All jobs into `out_dir`, resuming, no progress bar, not cancelled, real files.
+    pub fn new(out_dir: impl Into<PathBuf>) -> Self {
+        BatchOptions {
+            out_dir: out_dir.into(),
+            shard: (0, 1),
+            force: false,
+            progress: false,
+            cancel: Arc::new(AtomicBool::new(false)),
+            sink: Arc::new(FileSystem),
+        }
+    }
 }
 
 /// How a run ended.
@@ -42,6 +69,10 @@ pub struct BatchSummary {
     pub rendered: usize,
     pub skipped: usize,
     pub failed: usize,
+    /// Whether [`BatchOptions::cancel`] stopped the run early.
+    pub cancelled: bool,
+    /// Jobs of this shard that a cancelled run never started.
+    pub not_started: usize,
     pub manifest: PathBuf,
     pub contact_sheet: PathBuf,
 }
@@ -73,10 +104,9 @@ pub fn run_batch(
         path: options.out_dir.clone(),
         message: format!("cannot create the output directory: {e}"),
     })?;
-    let jobs: Vec<JobSpec> = plan
-        .jobs()
-        .into_iter()
-        .filter(|j| in_shard(j.id, options.shard))
+    let jobs: Vec<JobSpec> = (0..plan.job_count())
+        .filter(|&id| in_shard(id, options.shard))
+        .map(|id| plan.job(id))
         .collect();
     let previous = if options.force {
         BTreeMap::new()
@@ -89,15 +119,28 @@ pub fn run_batch(
         (_, 1) => "contact_sheet.png".to_string(),
         (i, n) => format!("contact_sheet-shard-{i}-of-{n}.png"),
     };
+    remove_leftover_temps(
+        plan,
+        &jobs,
+        options,
+        [&manifest_path, Path::new(&sheet_name)],
+    );
     let progress = progress_bar(jobs.len(), options.progress);
     let mut renderer = SceneRenderer::new(gpu)?;
 
     let (sender, receiver) = mpsc::sync_channel::<Message>(WRITER_QUEUE);
     let writer_manifest = Manifest::new(manifest_path.clone(), &sweep_paths);
     let writer_progress = progress.clone();
+    let sink: &dyn OutputSink = options.sink.as_ref();
+    let mut started = 0;
     let result = std::thread::scope(|scope| {
-        let writer = scope.spawn(move || write_loop(receiver, writer_manifest, writer_progress));
+        let writer =
+            scope.spawn(move || write_loop(receiver, writer_manifest, writer_progress, sink));
         for job in &jobs {
+            if options.cancel.load(Ordering::SeqCst) {
+                break;
+            }
+            started += 1;
             let message = render_job(gpu, &mut renderer, plan, job, &options.out_dir, &previous);
             if let Message::Failed { row } = &message {
                 progress.suspend(|| eprintln!("error: job {}: {}", row.job, row.status));
@@ -115,14 +158,43 @@ pub fn run_batch(
     let (manifest, tiles, counts) = result?;
     let sheet_path = options.out_dir.join(sheet_name);
     let labelled: Vec<Tile> = tiles.into_values().collect();
-    output::atomic::write_atomically(&sheet_path, &contact_sheet_png(&labelled)?)?;
+    sink::write_file(sink, &sheet_path, &contact_sheet_png(&labelled)?)?;
     Ok(BatchSummary {
         rendered: counts.0,
         skipped: counts.1,
         failed: counts.2,
+        cancelled: started < jobs.len(),
+        not_started: jobs.len() - started,
         manifest: manifest.path,
         contact_sheet: sheet_path,
     })
+}
+
+/// Temporary files a killed run left next to this shard's outputs (either format), its manifest
+/// and its contact sheet.
+fn remove_leftover_temps(
+    plan: &BatchPlan,
+    jobs: &[JobSpec],
+    options: &BatchOptions,
+    own: [&Path; 2],
+) {
+    let mut names: Vec<String> = own
+        .iter()
+        .filter_map(|p| p.file_name())
+        .map(|n| n.to_string_lossy().into_owned())
+        .collect();
+    for job in jobs {
+        for format in [OutputFormat::Png, OutputFormat::Exr] {
+            names.extend(plan.file_name(job, format));
+        }
+    }
+    let removed = sink::remove_leftover_temps(&options.out_dir, &names);
+    if removed > 0 {
+        eprintln!(
+            "removed {removed} temporary file(s) an interrupted run left in {}",
+            options.out_dir.display()
+        );
+    }
 }
 
 fn progress_bar(len: usize, wanted: bool) -> ProgressBar {
@@ -193,14 +265,17 @@ fn render_job(
 type WriterResult = (Manifest, BTreeMap<usize, Tile>, (usize, usize, usize));
 
 /// The writer thread: encode + write, manifest row, tile, progress; the manifest is saved after
-/// every job so a killed run can resume.
+/// every job so a killed run can resume. A manifest that cannot be saved (a full disk) is retried
+/// after the next job and must be saved at the end.
 fn write_loop(
     receiver: mpsc::Receiver<Message>,
     mut manifest: Manifest,
     progress: ProgressBar,
+    sink: &dyn OutputSink,
 ) -> Result<WriterResult> {
     let mut tiles = BTreeMap::new();
     let (mut rendered, mut skipped, mut failed) = (0, 0, 0);
+    let mut manifest_warned = false;
     for message in receiver {
         let (mut row, image) = match message {
             Message::Render {
@@ -208,12 +283,13 @@ fn write_loop(
                 path,
                 image,
                 png,
-            } => match output::write_image(&path, &image, &png) {
+            } => match write_image(sink, &path, &image, &png) {
                 Ok(()) => {
                     rendered += 1;
                     (row, Some(Thumbnail::from_hdr(&image, &png)))
                 }
                 Err(e) => {
+                    progress.suspend(|| eprintln!("error: job {}: {e}", row.job));
                     let row = ManifestRow {
                         status: format!("failed: {e}"),
                         ..row
@@ -246,10 +322,33 @@ fn write_loop(
         }
         tiles.insert(row.job, Tile { image, lines });
         manifest.rows.insert(row.job, row);
-        manifest.save()?;
+        if let Err(e) = manifest.save(sink) {
+            if !manifest_warned {
+                progress.suspend(|| eprintln!("warning: {e}; retrying after the next job"));
+                manifest_warned = true;
+            }
+        }
         progress.inc(1);
     }
+    manifest.save(sink)?;
     Ok((manifest, tiles, (rendered, skipped, failed)))
+}
+
+/// Encodes in memory (format by extension), then writes atomically through `sink`.
+fn write_image(
+    sink: &dyn OutputSink,
+    path: &Path,
+    image: &HdrImage,
+    png: &PngSettings,
+) -> Result<()> {
+    let encoded = OutputFormat::from_path(path).and_then(|format| match format {
+        OutputFormat::Png => output::png::encode_png(image, png),
+        OutputFormat::Exr => output::exr::encode_exr(image),
+    });
+    match encoded {
+        Ok(bytes) => sink::write_file(sink, path, &bytes),
+        Err(cause) => Err(output::atomic::failed_write(path, &cause.to_string())),
+    }
 }
 
 /// `object.0.material.r` → `0.material.r`: enough to tell sweeps apart on a 192-pixel tile.

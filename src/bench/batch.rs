@@ -1,0 +1,126 @@
+//! Batch benchmark: a sweep of `batch_jobs` jobs (the bowl scene of the render benchmark, orbiting
+//! camera) rendered to PNG by the library's batch runner, images per second of the whole run,
+//! against the ceiling 1 / (GPU time of one image's submit) measured in the same invocation.
+
+use serde::Serialize;
+
+use super::{BenchConfig, ScratchDir, Stat, Target};
+use crate::gpu::GpuContext;
+use crate::raster::draw::{Background, DrawOptions};
+use crate::scene::batch::{run_batch, BatchOptions, BatchPlan};
+use crate::scene::SceneRenderer;
+use crate::{Error, Result};
+
+/// The issue's target: throughput ≥ 90 % of 1 / (GPU render time per image).
+pub const EFFICIENCY_LIMIT: f64 = 0.9;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct BatchBench {
+    pub jobs: usize,
+    pub width: u32,
+    pub height: u32,
+    pub samples: u32,
+    /// Wall time of one whole batch run, setup to contact sheet (s).
+    pub run_wall: Stat,
+    /// jobs / run_wall, per run (images per second).
+    pub images_per_second: Stat,
+    /// GPU time of one image's submit (barriers, passes, resolve, copy-out), from timestamps (s).
+    pub gpu_per_image: Stat,
+    /// 1 / gpu_per_image.median (images per second).
+    pub gpu_ceiling: f64,
+    /// images_per_second.median / gpu_ceiling.
+    pub efficiency: f64,
+    pub target: Target,
+}
+
+fn jobs_toml(config: &BenchConfig) -> String {
+    let step = 360.0 / config.batch_jobs as f64;
+    let orbits: Vec<String> = (0..config.batch_jobs)
+        .map(|i| format!("{:.4}", i as f64 * step))
+        .collect();
+    format!(
+        r#"name = "job-{{job}}"
+[scene.camera]
+eye = [0.0, 2.2, 3.2]
+target = [0.0, 0.3, 0.0]
+fov_deg = 30
+[[scene.object]]
+mesh = "builtin:bowl"
+material = {{ preset = "smooth-red" }}
+[scene.environment]
+source = "builtin:studio"
+[scene.output]
+size = "{size}x{size}"
+samples = 4
+background = "env"
+[sweep]
+"camera.orbit_deg" = [{orbits}]
+"#,
+        size = config.batch_size,
+        orbits = orbits.join(", ")
+    )
+}
+
+pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<BatchBench> {
+    let scratch = ScratchDir::new("batch")?;
+    let plan = BatchPlan::parse(&jobs_toml(config), "bench batch", &scratch.0)?;
+    let jobs = plan.jobs().len();
+    let options = BatchOptions {
+        force: true,
+        ..BatchOptions::new(scratch.0.join("out"))
+    };
+    let (mut wall, mut rate) = (Vec::new(), Vec::new());
+    for run in 0..=config.runs {
+        let start = std::time::Instant::now();
+        let summary = run_batch(gpu, &plan, &options)?;
+        let seconds = start.elapsed().as_secs_f64();
+        if summary.failed > 0 || summary.rendered != jobs {
+            return Err(Error::invalid(
+                "bench batch",
+                format!("{} of {jobs} rendered", summary.rendered),
+                "every benchmark job must render; see the errors above",
+            ));
+        }
+        if run > 0 {
+            wall.push(seconds);
+            rate.push(jobs as f64 / seconds);
+        }
+    }
+    // The GPU time of one job's image, same scene, same renderer code path.
+    let scene = super::render::bowl_scene(config.batch_size, 4, Background::Environment)?;
+    let mut renderer = SceneRenderer::new(gpu)?;
+    let mut per_image = Vec::new();
+    for run in 0..=config.runs {
+        let (_, timings) = renderer.render_with(
+            gpu,
+            &scene,
+            DrawOptions {
+                timed: true,
+                ..DrawOptions::default()
+            },
+        )?;
+        if let (true, Some(t)) = (run > 0, timings) {
+            per_image.push(t.total);
+        }
+    }
+    let gpu_per_image = Stat::of(per_image);
+    let images_per_second = Stat::of(rate);
+    let gpu_ceiling = 1.0 / gpu_per_image.median;
+    let efficiency = images_per_second.median / gpu_ceiling;
+    Ok(BatchBench {
+        jobs,
+        width: config.batch_size,
+        height: config.batch_size,
+        samples: 4,
+        run_wall: Stat::of(wall),
+        images_per_second,
+        gpu_per_image,
+        gpu_ceiling,
+        efficiency,
+        target: Target::at_least(
+            "batch: images per second / (1 / GPU time per image)",
+            efficiency,
+            EFFICIENCY_LIMIT,
+        ),
+    })
+}

@@ -1,0 +1,121 @@
+//! Start-up benchmark: wall time from spawning `shikki render` (this executable, the default scene:
+//! two bowls and a tray lit by the 1024 × 512 studio environment) to its exit with the image
+//! written. Cold: empty cache directory every run (no pipeline cache, no prefiltered environment).
+//! Warm: the same directory after a first run filled it.
+
+use std::path::Path;
+use std::process::Command;
+
+use serde::Serialize;
+
+use super::{BenchConfig, ScratchDir, Stat, Target};
+use crate::{Error, Result};
+
+/// The target: warm start-up ≤ 50 % of cold.
+pub const WARM_LIMIT: f64 = 0.5;
+
+/// The environment variable a child `shikki` reads to print its peak resident memory at exit.
+pub const REPORT_PEAK_MEMORY: &str = "SHIKKI_REPORT_PEAK_MEMORY";
+/// The line prefix of that report on stderr.
+pub const PEAK_MEMORY_PREFIX: &str = "shikki-peak-rss-kib=";
+
+#[derive(Clone, Debug, Serialize)]
+pub struct StartupBench {
+    pub command: String,
+    pub cold: Stat,
+    pub warm: Stat,
+    /// warm.median / cold.median.
+    pub warm_over_cold: f64,
+    pub target: Target,
+}
+
+/// What one child run reported.
+pub(crate) struct ChildRun {
+    pub seconds: f64,
+    pub peak_rss_kib: Option<u64>,
+}
+
+pub(crate) fn render_args(config: &BenchConfig, out: &Path) -> Vec<String> {
+    vec![
+        "render".into(),
+        "-o".into(),
+        out.display().to_string(),
+        "--size".into(),
+        format!("{0}x{0}", config.startup_size),
+    ]
+}
+
+/// Runs `shikki render` with its caches in `cache_dir`; fails with the child's stderr.
+pub(crate) fn run_child(config: &BenchConfig, cache_dir: &Path) -> Result<ChildRun> {
+    let exe = std::env::current_exe().map_err(|source| Error::Read {
+        path: "current executable".into(),
+        source,
+    })?;
+    let out = cache_dir.join("startup.png");
+    let start = std::time::Instant::now();
+    let output = Command::new(&exe)
+        .args(render_args(config, &out))
+        .env("SHIKKI_PIPELINE_CACHE", cache_dir.join("pipelines.bin"))
+        .env_remove("SHIKKI_ENV_CACHE")
+        .env(REPORT_PEAK_MEMORY, "1")
+        .output()
+        .map_err(|source| Error::Read {
+            path: exe.clone(),
+            source,
+        })?;
+    let seconds = start.elapsed().as_secs_f64();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    if !output.status.success() {
+        return Err(Error::invalid(
+            "bench child render",
+            exe.display(),
+            format!("`shikki render` failed: {}", stderr.trim()),
+        ));
+    }
+    let peak_rss_kib = stderr
+        .lines()
+        .find_map(|l| l.strip_prefix(PEAK_MEMORY_PREFIX))
+        .and_then(|v| v.trim().parse().ok());
+    Ok(ChildRun {
+        seconds,
+        peak_rss_kib,
+    })
+}
+
+pub fn run(config: &BenchConfig) -> Result<StartupBench> {
+    let (mut cold, mut warm) = (Vec::new(), Vec::new());
+    for run in 0..=config.runs {
+        // A fresh directory: nothing cached.
+        let scratch = ScratchDir::new("startup")?;
+        let seconds = run_child(config, &scratch.0)?.seconds;
+        if run > 0 {
+            cold.push(seconds);
+        }
+    }
+    let scratch = ScratchDir::new("startup-warm")?;
+    run_child(config, &scratch.0)?; // fills the caches (and warms the OS file cache)
+    for _ in 0..config.runs {
+        warm.push(run_child(config, &scratch.0)?.seconds);
+    }
+    let (cold, warm) = (Stat::of(cold), Stat::of(warm));
+    let ratio = warm.median / cold.median;
+    Ok(StartupBench {
+        command: format!(
+            "shikki {}",
+            render_args(config, Path::new("OUT.png")).join(" ")
+        ),
+        cold,
+        warm,
+        warm_over_cold: ratio,
+        target: Target::at_most("startup: warm / cold", ratio, WARM_LIMIT),
+    })
+}
+
+/// Peak resident memory of this process so far (VmHWM), in KiB; Linux only.
+pub fn peak_rss_kib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
+}

@@ -1,0 +1,125 @@
+//! The human-readable form of a [`BenchReport`]: a Markdown table (pasted into BENCHMARKS.md).
+
+use super::{BenchReport, Stat};
+
+fn ms(s: &Stat) -> String {
+    format!("{:.1} ms", s.median * 1e3)
+}
+
+fn spread(s: &Stat) -> String {
+    format!("{:.1}–{:.1}", s.min * 1e3, s.max * 1e3)
+}
+
+/// The report as Markdown: machine, driver, one row per figure, then the targets.
+pub fn markdown(report: &BenchReport) -> String {
+    let r = report;
+    let mut out = format!(
+        "shikki {} ({} build), {} runs per figure after a warm-up\n\n\
+         - machine: {} ({} cores, {})\n\
+         - driver: {} — {} {} (Vulkan {})\n\n\
+         | stage | figure | median | min–max (ms) |\n|---|---|---|---|\n",
+        r.shikki_version,
+        r.build_profile,
+        r.config.runs,
+        r.machine.cpu_model,
+        r.machine.cores,
+        r.machine.os,
+        r.driver.device,
+        r.driver.driver_name,
+        r.driver.driver_info,
+        r.driver.vulkan,
+    );
+    let mut row = |stage: &str, figure: String, s: &Stat| {
+        out.push_str(&format!(
+            "| {stage} | {figure} | {} | {} |\n",
+            ms(s),
+            spread(s)
+        ));
+    };
+    if let Some(render) = &r.render {
+        let name = format!(
+            "bowl {} tris, {}², {}× MSAA, env + {} lights",
+            render.triangles, render.width, render.samples, render.lights
+        );
+        row(
+            "render",
+            format!("{name}: lacquer mesh pass (GPU)"),
+            &render.lacquer_gpu,
+        );
+        row(
+            "render",
+            "same, trivial.frag mesh pass (GPU)".into(),
+            &render.trivial_gpu,
+        );
+        row(
+            "render",
+            "lacquer render call (wall)".into(),
+            &render.lacquer_wall,
+        );
+        row(
+            "render",
+            "copy-out to readback (GPU)".into(),
+            &render.copy_out_gpu,
+        );
+    }
+    if let Some(p) = &r.prefilter {
+        row(
+            "prefilter",
+            format!(
+                "face {}, K = {} + irradiance: GPU (wall)",
+                p.face_size, p.layers
+            ),
+            &p.gpu_wall,
+        );
+        row("prefilter", "GPU passes (timestamps)".into(), &p.gpu_passes);
+        row(
+            "prefilter",
+            format!("CPU oracle, {} threads (wall)", p.cpu_threads),
+            &p.cpu_oracle,
+        );
+    }
+    let mut derived = String::new();
+    if let Some(b) = &r.batch {
+        row(
+            "batch",
+            format!("{} jobs at {}² → PNG, whole run (wall)", b.jobs, b.width),
+            &b.run_wall,
+        );
+        row(
+            "batch",
+            "GPU time per image (timestamps)".into(),
+            &b.gpu_per_image,
+        );
+        derived.push_str(&format!(
+            "| batch images / s (median) | {:.2} |\n\
+             | batch GPU ceiling, images / s | {:.2} |\n",
+            b.images_per_second.median, b.gpu_ceiling
+        ));
+    }
+    if let Some(s) = &r.startup {
+        row("startup", format!("cold: `{}`", s.command), &s.cold);
+        row("startup", "warm (caches filled)".into(), &s.warm);
+    }
+    if let Some(m) = &r.memory {
+        derived.push_str(&format!(
+            "| memory: peak RSS cold / warm ({}²) | {:.0} / {:.0} MiB |\n",
+            m.image_side, m.cold_peak_mib.median, m.warm_peak_mib.median
+        ));
+    }
+    if !derived.is_empty() {
+        out.push_str("\n| derived | value |\n|---|---|\n");
+        out.push_str(&derived);
+    }
+    out.push_str("\n| target | value | limit | met |\n|---|---|---|---|\n");
+    for t in &r.targets {
+        out.push_str(&format!(
+            "| {} | {:.3} | {} {} | {} |\n",
+            t.description,
+            t.value,
+            if t.at_least { "≥" } else { "≤" },
+            t.limit,
+            if t.met { "yes" } else { "**no**" }
+        ));
+    }
+    out
+}

@@ -1,0 +1,210 @@
+//! Where a batch's files go: the [`OutputSink`] seam between the writer thread and the disk.
+//!
+//! Every file a batch writes (images, manifest, contact sheet) goes through [`write_file`]:
+//! a temporary file next to the target → the sink writes the bytes into it → fsync → rename. On
+//! any error the temporary file is removed, no file is left at the target (the stale-file policy
+//! of `output::atomic` applies) and the error names the file and the cause.
+//!
+//! The default sink, [`FileSystem`], simply writes the bytes. A library user (in practice a test)
+//! may hand [`super::BatchOptions`] a sink that fails, e.g. with ENOSPC after N bytes, to check
+//! that a full disk fails one job and not the batch. The sequence mirrors
+//! `output::atomic::write_atomically` (same temporary names, so [`remove_leftover_temps`] finds
+//! either's), which has no hook for the writer.
+
+use std::collections::HashSet;
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::output::atomic::failed_write;
+use crate::Result;
+
+/// Writes the bytes of one batch file into the temporary file that becomes the target.
+pub trait OutputSink: Send + Sync + std::fmt::Debug {
+    /// Writes all of `bytes` into `file`, the freshly created temporary file that is renamed to
+    /// `target` once complete. An error leaves nothing at `target`.
+    fn write_bytes(&self, target: &Path, file: &mut File, bytes: &[u8]) -> io::Result<()> {
+        let _ = target;
+        file.write_all(bytes)
+    }
+}
+
+/// The real file system: every byte is written.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FileSystem;
+
+impl OutputSink for FileSystem {}
+
+/// Writes `bytes` to `path` atomically through `sink` (see the module doc).
+pub fn write_file(sink: &dyn OutputSink, path: &Path, bytes: &[u8]) -> Result<()> {
+    replace_via_temp(sink, path, bytes).map_err(|cause| failed_write(path, &cause))
+}
+
+/// Removes temporary files that a killed run (SIGKILL, a second Ctrl-C, a power cut) left next to
+/// the files named in `names`; returns how many. Only this run's names are touched, so shards
+/// writing into the same directory keep their own temporaries.
+pub fn remove_leftover_temps(dir: &Path, names: &[String]) -> usize {
+    let Ok(entries) = fs::read_dir(dir) else {
+        return 0;
+    };
+    let stems: HashSet<String> = names.iter().map(|n| temp_stem(n)).collect();
+    entries
+        .flatten()
+        .filter(|entry| {
+            // `.<stem>.<pid>-<n>.tmp`: the stem may hold dots, the `<pid>-<n>` part has none.
+            let name = entry.file_name().to_string_lossy().into_owned();
+            name.strip_prefix('.')
+                .and_then(|rest| rest.strip_suffix(".tmp"))
+                .and_then(|rest| rest.rsplit_once('.'))
+                .is_some_and(|(stem, _)| stems.contains(stem))
+        })
+        .filter(|entry| entry.file_type().is_ok_and(|t| t.is_file()))
+        .filter(|entry| fs::remove_file(entry.path()).is_ok())
+        .count()
+}
+
+/// Bounded so that a target name near the 255-byte limit still has a valid temporary name.
+fn temp_stem(file_name: &str) -> String {
+    file_name.chars().take(64).collect()
+}
+
+fn replace_via_temp(
+    sink: &dyn OutputSink,
+    path: &Path,
+    bytes: &[u8],
+) -> std::result::Result<(), String> {
+    let file_name = path
+        .file_name()
+        .ok_or_else(|| format!("{} has no file name", path.display()))?
+        .to_string_lossy()
+        .into_owned();
+    let directory = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    };
+    let mut temp = TempFile::create_in(directory, &file_name)?;
+    let temp_name = temp.path.display().to_string();
+    let describe =
+        |what: &str, e: io::Error| format!("{what} the temporary file {temp_name} failed ({e})");
+    sink.write_bytes(path, &mut temp.file, bytes)
+        .map_err(|e| describe("writing", e))?;
+    // fsync before rename: otherwise a crash can leave the new name pointing at an empty file.
+    temp.file.sync_all().map_err(|e| describe("syncing", e))?;
+    fs::rename(&temp.path, path).map_err(|e| {
+        format!(
+            "renaming the temporary file to {} failed ({e})",
+            path.display()
+        )
+    })?;
+    temp.persisted = true;
+    if let Ok(dir) = File::open(directory) {
+        // Best effort: makes the rename durable where the platform allows syncing a directory.
+        let _ = dir.sync_all();
+    }
+    Ok(())
+}
+
+/// A temporary file next to the target; deleted on drop unless `persisted` (renamed away).
+struct TempFile {
+    path: PathBuf,
+    file: File,
+    persisted: bool,
+}
+
+impl TempFile {
+    /// `.<name>.<pid>-b<n>.tmp`, created with `create_new` so no two writers share one.
+    fn create_in(directory: &Path, file_name: &str) -> std::result::Result<Self, String> {
+        static COUNTER: AtomicU64 = AtomicU64::new(0);
+        let stem = temp_stem(file_name);
+        loop {
+            let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+            let path = directory.join(format!(".{stem}.{}-b{n}.tmp", std::process::id()));
+            match OpenOptions::new().write(true).create_new(true).open(&path) {
+                Ok(file) => {
+                    return Ok(TempFile {
+                        path,
+                        file,
+                        persisted: false,
+                    })
+                }
+                // Left by a killed process with our pid and counter: try the next name.
+                Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
+                Err(e) => {
+                    return Err(format!(
+                        "cannot create a file in the directory {} ({e}); check that it exists, \
+                         is a directory and is writable, or choose another --out",
+                        directory.display()
+                    ))
+                }
+            }
+        }
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        if !self.persisted {
+            // The error being returned is the one the user needs; nothing more can be done here.
+            let _ = fs::remove_file(&self.path);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    /// Writes `limit` bytes, then fails as a full disk does.
+    #[derive(Debug)]
+    struct FullAfter(usize);
+
+    impl OutputSink for FullAfter {
+        fn write_bytes(&self, _: &Path, file: &mut File, bytes: &[u8]) -> io::Result<()> {
+            file.write_all(&bytes[..self.0.min(bytes.len())])?;
+            file.sync_all()?;
+            Err(io::Error::other("No space left on device"))
+        }
+    }
+
+    #[test]
+    fn a_failing_sink_leaves_neither_temp_nor_target_and_removes_a_stale_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.png");
+        fs::write(&path, b"yesterday").unwrap();
+        let message = write_file(&FullAfter(3), &path, b"0123456789")
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("No space left"), "{message}");
+        assert!(message.contains("was removed"), "{message}");
+        assert!(entries(dir.path()).is_empty(), "{:?}", entries(dir.path()));
+        write_file(&FileSystem, &path, b"today").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"today");
+        assert_eq!(entries(dir.path()), vec!["out.png"]);
+    }
+
+    #[test]
+    fn leftover_temps_of_this_runs_names_are_removed_others_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in [
+            ".a.png.7-b0.tmp",
+            ".a.png.8-3.tmp",
+            ".b.png.7-b1.tmp",
+            "a.png",
+        ] {
+            fs::write(dir.path().join(name), b"x").unwrap();
+        }
+        let removed = remove_leftover_temps(dir.path(), &["a.png".into()]);
+        assert_eq!(removed, 2);
+        assert_eq!(entries(dir.path()), vec![".b.png.7-b1.tmp", "a.png"]);
+    }
+}
