@@ -335,7 +335,7 @@ fn cli_image_size_beyond_what_the_argument_accepts_is_a_usage_error() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     // clap's usage errors exit with 2.
     assert_eq!(out.status.code(), Some(2), "{stderr}");
-    assert_names(&stderr, &["--size", "100000x100000", "WxH"]);
+    assert_names(&stderr, &["--size", "100000x100000", "WxH", "1..=65535"]);
     assert!(ws.outputs().is_empty());
 }
 

@@ -234,7 +234,9 @@ fn parse_vec3_arg(s: &str) -> std::result::Result<DVec3, String> {
 
 /// `WxH` with both in 1..=65535.
 pub fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
-    let err = || format!("size {s:?}: expected WxH with positive integers, e.g. 1024x768");
+    let err = || {
+        format!("size {s:?}: expected WxH with W and H in 1..=65535 (and within the device's image limit), e.g. 1024x768")
+    };
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(err)?;
     let w: u32 = w.trim().parse().map_err(|_| err())?;
     let h: u32 = h.trim().parse().map_err(|_| err())?;
