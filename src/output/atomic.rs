@@ -21,7 +21,17 @@ use crate::{Error, Result};
 /// On failure, a pre-existing file at `path` is removed too (see the module doc) and the error
 /// message says whether that happened.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    replace_via_temp(path, bytes).map_err(|cause| failed_write(path, &cause))
+    write_atomically_with(path, bytes, |file, bytes| file.write_all(bytes))
+}
+
+/// [`write_atomically`] with the step that puts the bytes into the temporary file supplied by the
+/// caller (the batch's output sink, which tests replace with one that fails like a full disk).
+pub(crate) fn write_atomically_with(
+    path: &Path,
+    bytes: &[u8],
+    write: impl FnOnce(&mut File, &[u8]) -> io::Result<()>,
+) -> Result<()> {
+    replace_via_temp(path, bytes, write).map_err(|cause| failed_write(path, &cause))
 }
 
 /// Removes a previous run's file at `path` so it cannot be mistaken for the output of a run that
@@ -70,16 +80,18 @@ pub(crate) fn probe_directory(path: &Path) -> std::result::Result<(), String> {
 }
 
 /// The write → fsync → rename sequence. Any early return drops the [`TempFile`], deleting it.
-fn replace_via_temp(path: &Path, bytes: &[u8]) -> std::result::Result<(), String> {
+fn replace_via_temp(
+    path: &Path,
+    bytes: &[u8],
+    write: impl FnOnce(&mut File, &[u8]) -> io::Result<()>,
+) -> std::result::Result<(), String> {
     let file_name = file_name_of(path)?;
     let directory = directory_of(path);
     let mut temp = TempFile::create_in(directory, file_name)?;
     let temp_name = temp.path.display().to_string();
     let describe =
         |what: &str, e: io::Error| format!("{what} the temporary file {temp_name} failed ({e})");
-    temp.file
-        .write_all(bytes)
-        .map_err(|e| describe("writing", e))?;
+    write(&mut temp.file, bytes).map_err(|e| describe("writing", e))?;
     // fsync before rename: otherwise a crash can leave the new name pointing at an empty file.
     temp.file.sync_all().map_err(|e| describe("syncing", e))?;
     fs::rename(&temp.path, path).map_err(|e| {

@@ -7,17 +7,16 @@
 //!
 //! The default sink, [`FileSystem`], simply writes the bytes. A library user (in practice a test)
 //! may hand [`super::BatchOptions`] a sink that fails, e.g. with ENOSPC after N bytes, to check
-//! that a full disk fails one job and not the batch. The sequence mirrors
-//! `output::atomic::write_atomically` (same temporary names, so [`remove_leftover_temps`] finds
-//! either's), which has no hook for the writer.
+//! that a full disk fails one job and not the batch. The sequence is
+//! `output::atomic::write_atomically_with`'s, so [`remove_leftover_temps`] knows its temporary
+//! names.
 
 use std::collections::HashSet;
-use std::fs::{self, File, OpenOptions};
+use std::fs::{self, File};
 use std::io::{self, Write};
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::path::Path;
 
-use crate::output::atomic::failed_write;
+use crate::output::atomic::write_atomically_with;
 use crate::Result;
 
 /// Writes the bytes of one batch file into the temporary file that becomes the target.
@@ -38,7 +37,9 @@ impl OutputSink for FileSystem {}
 
 /// Writes `bytes` to `path` atomically through `sink` (see the module doc).
 pub fn write_file(sink: &dyn OutputSink, path: &Path, bytes: &[u8]) -> Result<()> {
-    replace_via_temp(sink, path, bytes).map_err(|cause| failed_write(path, &cause))
+    write_atomically_with(path, bytes, |file, bytes| {
+        sink.write_bytes(path, file, bytes)
+    })
 }
 
 /// Removes temporary files that a killed run (SIGKILL, a second Ctrl-C, a power cut) left next to
@@ -67,88 +68,6 @@ pub fn remove_leftover_temps(dir: &Path, names: &[String]) -> usize {
 /// Bounded so that a target name near the 255-byte limit still has a valid temporary name.
 fn temp_stem(file_name: &str) -> String {
     file_name.chars().take(64).collect()
-}
-
-fn replace_via_temp(
-    sink: &dyn OutputSink,
-    path: &Path,
-    bytes: &[u8],
-) -> std::result::Result<(), String> {
-    let file_name = path
-        .file_name()
-        .ok_or_else(|| format!("{} has no file name", path.display()))?
-        .to_string_lossy()
-        .into_owned();
-    let directory = match path.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent,
-        _ => Path::new("."),
-    };
-    let mut temp = TempFile::create_in(directory, &file_name)?;
-    let temp_name = temp.path.display().to_string();
-    let describe =
-        |what: &str, e: io::Error| format!("{what} the temporary file {temp_name} failed ({e})");
-    sink.write_bytes(path, &mut temp.file, bytes)
-        .map_err(|e| describe("writing", e))?;
-    // fsync before rename: otherwise a crash can leave the new name pointing at an empty file.
-    temp.file.sync_all().map_err(|e| describe("syncing", e))?;
-    fs::rename(&temp.path, path).map_err(|e| {
-        format!(
-            "renaming the temporary file to {} failed ({e})",
-            path.display()
-        )
-    })?;
-    temp.persisted = true;
-    if let Ok(dir) = File::open(directory) {
-        // Best effort: makes the rename durable where the platform allows syncing a directory.
-        let _ = dir.sync_all();
-    }
-    Ok(())
-}
-
-/// A temporary file next to the target; deleted on drop unless `persisted` (renamed away).
-struct TempFile {
-    path: PathBuf,
-    file: File,
-    persisted: bool,
-}
-
-impl TempFile {
-    /// `.<name>.<pid>-b<n>.tmp`, created with `create_new` so no two writers share one.
-    fn create_in(directory: &Path, file_name: &str) -> std::result::Result<Self, String> {
-        static COUNTER: AtomicU64 = AtomicU64::new(0);
-        let stem = temp_stem(file_name);
-        loop {
-            let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-            let path = directory.join(format!(".{stem}.{}-b{n}.tmp", std::process::id()));
-            match OpenOptions::new().write(true).create_new(true).open(&path) {
-                Ok(file) => {
-                    return Ok(TempFile {
-                        path,
-                        file,
-                        persisted: false,
-                    })
-                }
-                // Left by a killed process with our pid and counter: try the next name.
-                Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
-                Err(e) => {
-                    return Err(format!(
-                        "cannot create a file in the directory {} ({e}); check that it exists, \
-                         is a directory and is writable, or choose another --out",
-                        directory.display()
-                    ))
-                }
-            }
-        }
-    }
-}
-
-impl Drop for TempFile {
-    fn drop(&mut self) {
-        if !self.persisted {
-            // The error being returned is the one the user needs; nothing more can be done here.
-            let _ = fs::remove_file(&self.path);
-        }
-    }
 }
 
 #[cfg(test)]
