@@ -23,6 +23,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
+// The largest image side rendered or written, as in scene files (`[output] size`).
+#define SHIKKI_MAX_IMAGE_SIDE 16384
+
 // Result of every `shikki_*` call. On anything but `SHIKKI_STATUS_OK`, `shikki_last_error()`
 // holds a message that says what was wrong and how to fix it.
 typedef enum ShikkiStatus {
@@ -236,7 +239,8 @@ enum ShikkiStatus shikki_material_validate(struct ShikkiMaterial material);
 enum ShikkiStatus shikki_environment_load(const char *path, struct ShikkiEnvironment *out);
 
 // Makes an environment from linear RGB radiance, `width × height` pixels, row 0 at the top
-// (+Y), 3 floats per pixel (SPEC §4 mapping). The data is copied.
+// (+Y), 3 floats per pixel (SPEC §4 mapping). The data is copied. Limits (checked before `rgb`
+// is read): each side 1 to 32768, at most 2^28 pixels.
 //
 // # Safety
 // `rgb` is valid for reads of `width * height * 3` floats; `out` is valid for one write.
@@ -247,7 +251,8 @@ enum ShikkiStatus shikki_environment_destroy(struct ShikkiEnvironment environmen
 
 // Makes a mesh from caller arrays: `vertex_count` positions (xyz floats), normals (xyz floats,
 // or NULL to generate angle-weighted smooth normals), `index_count` u32 indices (a multiple of
-// 3, counter-clockwise seen from outside). The data is copied.
+// 3, counter-clockwise seen from outside). The data is copied. Limits (checked before the arrays
+// are read): 1 to 150,000,000 vertices, 1 to 50,000,000 triangles.
 //
 // # Safety
 // `positions` (and `normals` unless NULL) are valid for `vertex_count * 3` floats, `indices`

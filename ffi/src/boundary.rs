@@ -48,14 +48,20 @@ thread_local! {
 
 /// The message of the last failed call on this thread ("" after a successful one).
 pub fn last_error_ptr() -> *const c_char {
-    LAST_ERROR.with(|cell| cell.borrow().as_ptr())
+    // `try_with`, not `with`: a C thread may call in from its own thread-exit destructors after
+    // this thread's Rust thread-locals are gone, and `with` would then panic across `extern "C"`
+    // (an abort). There is no message to give then, so "".
+    LAST_ERROR
+        .try_with(|cell| cell.borrow().as_ptr())
+        .unwrap_or_else(|_| c"".as_ptr())
 }
 
 fn set_last_error(message: &str) {
     // Interior NULs would cut the C string short; they cannot come from our own messages but a
     // caller's path or TOML text may be quoted in one.
     let text = CString::new(message.replace('\0', "\\0")).unwrap_or_default();
-    LAST_ERROR.with(|cell| *cell.borrow_mut() = text);
+    // Ignored during thread teardown (see `last_error_ptr`): the status still tells the caller.
+    let _ = LAST_ERROR.try_with(|cell| *cell.borrow_mut() = text);
 }
 
 /// Runs `body` with unwinding caught: Ok → `SHIKKI_STATUS_OK` and an empty last error; Err →

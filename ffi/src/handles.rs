@@ -198,11 +198,14 @@ pub fn remove<H: HandleType>(handle: H) -> FfiResult {
         let mut table = table();
         let index = lookup(&table, handle)?;
         let slot = &mut table.slots[index];
-        // Generation 0 is skipped so that no live handle ever packs to a small integer that a
-        // caller might invent.
-        slot.generation = slot.generation.wrapping_add(1).max(1);
         let object = slot.object.take();
-        table.free.push(index as u32);
+        // A slot whose generation has run out is retired, never reused: wrapping round to a
+        // generation it had before would make a long-destroyed handle valid again. (It takes
+        // 2^32 - 1 create/destroy cycles of one slot, so the table stays small.)
+        if let Some(next) = slot.generation.checked_add(1) {
+            slot.generation = next;
+            table.free.push(index as u32);
+        }
         object
     };
     // Dropped outside the table lock: a renderer's teardown waits for the GPU.
@@ -265,6 +268,33 @@ mod tests {
         assert_eq!(status_of(remove(first)), Some(ShikkiStatus::InvalidHandle));
         assert_eq!(read::<_, u32>(second).ok(), Some(2));
         remove(second).expect("second destroy succeeds");
+    }
+
+    #[test]
+    fn a_slot_whose_generation_ran_out_is_never_reused() {
+        let _turn = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+        let last: ShikkiScene = insert(7_u16);
+        let index = (last.id & 0xffff_ffff) as usize - 1;
+        // Fast-forward this slot to its last generation instead of 2^32 create/destroy cycles.
+        let aged = {
+            let mut table = table();
+            table.slots[index].generation = u32::MAX;
+            ShikkiScene {
+                id: u64::from(u32::MAX) << 32 | (last.id & 0xffff_ffff),
+            }
+        };
+        remove(aged).expect("destroying the last generation succeeds");
+        let next: ShikkiScene = insert(8_u16);
+        assert_ne!(next.id & 0xffff_ffff, aged.id & 0xffff_ffff, "slot retired");
+        assert_eq!(
+            status_of(get::<_, u16>(aged)),
+            Some(ShikkiStatus::InvalidHandle)
+        );
+        assert_eq!(
+            status_of(get::<_, u16>(last)),
+            Some(ShikkiStatus::InvalidHandle)
+        );
+        remove(next).expect("destroy succeeds");
     }
 
     #[test]

@@ -6,8 +6,9 @@ use std::ffi::c_char;
 use std::path::Path;
 use std::sync::Arc;
 
+use shikki::environment::load::{MAX_PIXELS, MAX_SIDE};
 use shikki::environment::{load_environment, Equirect};
-use shikki::raster::mesh_io::{angle_weighted_normals, load_mesh};
+use shikki::raster::mesh_io::{angle_weighted_normals, load_mesh, MAX_TRIANGLES, MAX_VERTICES};
 use shikki::raster::{BuiltinMesh, Mesh};
 
 use crate::boundary::{c_str, check_out, ffi_boundary, slice, write_out, FfiError};
@@ -40,7 +41,8 @@ pub unsafe extern "C" fn shikki_environment_load(
 }
 
 /// Makes an environment from linear RGB radiance, `width × height` pixels, row 0 at the top
-/// (+Y), 3 floats per pixel (SPEC §4 mapping). The data is copied.
+/// (+Y), 3 floats per pixel (SPEC §4 mapping). The data is copied. Limits (checked before `rgb`
+/// is read): each side 1 to 32768, at most 2^28 pixels.
 ///
 /// # Safety
 /// `rgb` is valid for reads of `width * height * 3` floats; `out` is valid for one write.
@@ -53,15 +55,16 @@ pub unsafe extern "C" fn shikki_environment_create_rgb(
 ) -> ShikkiStatus {
     ffi_boundary!({
         check_out(out, "out")?;
-        if width == 0 || height == 0 {
+        // Checked against the file loader's limits before `rgb` is touched: a made-up size must
+        // not send us reading gigabytes past the caller's array.
+        let (w, h) = (width as usize, height as usize);
+        if !(1..=MAX_SIDE).contains(&w) || !(1..=MAX_SIDE).contains(&h) || w * h > MAX_PIXELS {
             return Err(FfiError::invalid(format!(
-                "environment size {width}×{height}: both sides must be at least 1 pixel"
+                "environment size {width}×{height}: each side must be 1 to {MAX_SIDE} pixels and \
+                 the whole at most {MAX_PIXELS} pixels (2^28); downscale the map"
             )));
         }
-        let count = (width as usize)
-            .checked_mul(height as usize)
-            .and_then(|n| n.checked_mul(3))
-            .ok_or_else(|| FfiError::invalid("environment size overflows"))?;
+        let count = w * h * 3;
         // SAFETY: the caller's contract above.
         let data = unsafe { slice(rgb, count, "rgb") }?;
         if let Some(i) = data.iter().position(|v| !v.is_finite() || *v < 0.0) {
@@ -93,7 +96,8 @@ pub extern "C" fn shikki_environment_destroy(environment: ShikkiEnvironment) -> 
 
 /// Makes a mesh from caller arrays: `vertex_count` positions (xyz floats), normals (xyz floats,
 /// or NULL to generate angle-weighted smooth normals), `index_count` u32 indices (a multiple of
-/// 3, counter-clockwise seen from outside). The data is copied.
+/// 3, counter-clockwise seen from outside). The data is copied. Limits (checked before the arrays
+/// are read): 1 to 150,000,000 vertices, 1 to 50,000,000 triangles.
 ///
 /// # Safety
 /// `positions` (and `normals` unless NULL) are valid for `vertex_count * 3` floats, `indices`
@@ -109,9 +113,21 @@ pub unsafe extern "C" fn shikki_mesh_create(
 ) -> ShikkiStatus {
     ffi_boundary!({
         check_out(out, "out")?;
-        let floats = vertex_count
-            .checked_mul(3)
-            .ok_or_else(|| FfiError::invalid("vertex_count overflows"))?;
+        // The counts are checked against the mesh loader's limits before any array is read: a
+        // made-up count must not send us reading past the caller's arrays.
+        if vertex_count == 0 || vertex_count > MAX_VERTICES {
+            return Err(FfiError::invalid(format!(
+                "vertex_count {vertex_count}: must be 1 to {MAX_VERTICES}"
+            )));
+        }
+        if index_count == 0 || index_count % 3 != 0 || index_count / 3 > MAX_TRIANGLES {
+            return Err(FfiError::invalid(format!(
+                "index_count {index_count}: must be a non-zero multiple of 3 (one triangle per 3 \
+                 indices), at most {} ({MAX_TRIANGLES} triangles)",
+                3 * MAX_TRIANGLES
+            )));
+        }
+        let floats = vertex_count * 3;
         let triples = |data: &[f32]| data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
         // SAFETY: the caller's contract above.
         let positions: Vec<[f32; 3]> = triples(unsafe { slice(positions, floats, "positions") }?);
@@ -120,11 +136,6 @@ pub unsafe extern "C" fn shikki_mesh_create(
         if let Some(&bad) = indices.iter().find(|&&i| i as usize >= vertex_count) {
             return Err(FfiError::invalid(format!(
                 "index {bad} is out of range: there are {vertex_count} vertices"
-            )));
-        }
-        if index_count % 3 != 0 {
-            return Err(FfiError::invalid(format!(
-                "index_count {index_count} is not a multiple of 3 (one triangle per 3 indices)"
             )));
         }
         let normals = if normals.is_null() {

@@ -20,7 +20,7 @@ use crate::boundary::{
     c_str, check_out, ffi_boundary, opt_c_str, slice, slice_mut, write_out, FfiError, FfiResult,
 };
 use crate::handles::{self, ShikkiRenderer, ShikkiScene};
-use crate::scene::{tone_curve_from_c, with_scene, SceneState};
+use crate::scene::{check_image_size, tone_curve_from_c, SceneState};
 use crate::status::ShikkiStatus;
 
 /// Options of `shikki_renderer_create`.
@@ -212,21 +212,30 @@ pub unsafe extern "C" fn shikki_renderer_validation_message_count(
     })
 }
 
-fn render_scene(renderer: ShikkiRenderer, scene: ShikkiScene) -> FfiResult<(HdrImage, SceneState)> {
-    // The scene is copied out (cheap: meshes and environments are shared) so that its lock is
-    // not held through the render.
-    let scene = handles::read::<_, SceneState>(scene)?;
-    let object = handles::get::<_, RendererState>(renderer)?;
-    let mut state = handles::lock(&object)?;
-    let image = state.render(&scene)?;
-    Ok((image, scene))
+/// A copy of the scene as it is now (cheap: meshes and environments are shared), so that its
+/// lock is not held through the render. The buffer check and the render use this one copy: a
+/// `shikki_scene_set_output` from another thread between the two cannot make the image a size
+/// other than the buffer's.
+fn snapshot(scene: ShikkiScene) -> FfiResult<SceneState> {
+    handles::read::<_, SceneState>(scene)
 }
 
+fn render_snapshot(renderer: ShikkiRenderer, scene: &SceneState) -> FfiResult<HdrImage> {
+    let object = handles::get::<_, RendererState>(renderer)?;
+    let mut state = handles::lock(&object)?;
+    state.render(scene)
+}
+
+/// `len` must be exactly `width × height × per_pixel`; computed without overflow, so a caller's
+/// made-up size is a `BUFFER_SIZE` error, not a wrapped-around match.
 fn check_len(what: &str, len: usize, width: u32, height: u32, per_pixel: usize) -> FfiResult {
-    let needed = width as usize * height as usize * per_pixel;
-    if len == needed {
+    let needed = (width as usize)
+        .checked_mul(height as usize)
+        .and_then(|n| n.checked_mul(per_pixel));
+    if needed == Some(len) {
         Ok(())
     } else {
+        let needed = needed.map_or_else(|| "more than memory holds".to_string(), |n| n.to_string());
         Err(FfiError::new(
             ShikkiStatus::BufferSize,
             format!(
@@ -234,6 +243,16 @@ fn check_len(what: &str, len: usize, width: u32, height: u32, per_pixel: usize) 
                  ({per_pixel} per pixel; shikki_scene_get_output gives a scene's size)"
             ),
         ))
+    }
+}
+
+/// The rendered pixels, as many as the buffer holds: `check_len` made them equal.
+fn copy_pixels<T>(out: &mut [T], image: &HdrImage, convert: impl Fn([f32; 4]) -> [T; 4])
+where
+    T: Copy,
+{
+    for (dst, src) in out.chunks_exact_mut(4).zip(&image.pixels) {
+        dst.copy_from_slice(&convert(*src));
     }
 }
 
@@ -250,14 +269,12 @@ pub unsafe extern "C" fn shikki_render_rgba32f(
     len: usize,
 ) -> ShikkiStatus {
     ffi_boundary!({
+        let scene = snapshot(scene)?;
+        check_len("rgba", len, scene.width, scene.height, 4)?;
         // SAFETY: the caller's contract above.
         let out = unsafe { slice_mut(rgba, len, "rgba") }?;
-        let (width, height) = with_scene(scene, |s| Ok((s.width, s.height)))?;
-        check_len("rgba", len, width, height, 4)?;
-        let (image, _) = render_scene(renderer, scene)?;
-        for (dst, src) in out.chunks_exact_mut(4).zip(&image.pixels) {
-            dst.copy_from_slice(src);
-        }
+        let image = render_snapshot(renderer, &scene)?;
+        copy_pixels(out, &image, |pixel| pixel);
         Ok(())
     })
 }
@@ -275,18 +292,18 @@ pub unsafe extern "C" fn shikki_render_rgba8(
     len: usize,
 ) -> ShikkiStatus {
     ffi_boundary!({
+        let scene = snapshot(scene)?;
+        check_len("rgba", len, scene.width, scene.height, 4)?;
         // SAFETY: the caller's contract above.
         let out = unsafe { slice_mut(rgba, len, "rgba") }?;
-        let (width, height) = with_scene(scene, |s| Ok((s.width, s.height)))?;
-        check_len("rgba", len, width, height, 4)?;
-        let (image, scene) = render_scene(renderer, scene)?;
+        let image = render_snapshot(renderer, &scene)?;
         let settings = PngSettings {
             exposure_ev: scene.exposure_ev,
             tone_curve: scene.tone_curve,
         };
-        for (dst, src) in out.chunks_exact_mut(4).zip(&image.pixels) {
-            dst.copy_from_slice(&shikki::output::png::straight_srgb8(*src, &settings));
-        }
+        copy_pixels(out, &image, |pixel| {
+            shikki::output::png::straight_srgb8(pixel, &settings)
+        });
         Ok(())
     })
 }
@@ -306,7 +323,8 @@ pub unsafe extern "C" fn shikki_render_to_file(
         // SAFETY: the caller's contract above.
         let path = Path::new(unsafe { c_str(path, "path") }?);
         output::preflight_output(path)?;
-        let (image, scene) = render_scene(renderer, scene)?;
+        let scene = snapshot(scene)?;
+        let image = render_snapshot(renderer, &scene)?;
         let settings = PngSettings {
             exposure_ev: scene.exposure_ev,
             tone_curve: scene.tone_curve,
@@ -333,11 +351,12 @@ pub unsafe extern "C" fn shikki_image_write(
     path: *const c_char,
 ) -> ShikkiStatus {
     ffi_boundary!({
+        check_image_size(width, height)?;
+        check_len("rgba", len, width, height, 4)?;
         // SAFETY: the caller's contract above.
         let pixels = unsafe { slice(rgba, len, "rgba") }?;
         // SAFETY: the caller's contract above.
         let path = Path::new(unsafe { c_str(path, "path") }?);
-        check_len("rgba", len, width, height, 4)?;
         let settings = PngSettings {
             exposure_ev,
             tone_curve: tone_curve_from_c(tone_curve)?,

@@ -80,6 +80,21 @@ pub fn tone_curve_from_c(value: u32) -> FfiResult<ToneCurve> {
     }
 }
 
+/// The largest image side rendered or written, as in scene files (`[output] size`).
+pub const SHIKKI_MAX_IMAGE_SIDE: u32 = 16384;
+
+/// An image size the renderer and the encoders accept: each side in 1..=[`SHIKKI_MAX_IMAGE_SIDE`].
+pub fn check_image_size(width: u32, height: u32) -> FfiResult {
+    if (1..=SHIKKI_MAX_IMAGE_SIDE).contains(&width) && (1..=SHIKKI_MAX_IMAGE_SIDE).contains(&height)
+    {
+        Ok(())
+    } else {
+        Err(FfiError::invalid(format!(
+            "image size {width}×{height}: each side must be 1 to {SHIKKI_MAX_IMAGE_SIDE} pixels"
+        )))
+    }
+}
+
 /// Runs `change` on the scene behind `scene`.
 pub fn with_scene<R>(
     scene: ShikkiScene,
@@ -368,11 +383,7 @@ pub extern "C" fn shikki_scene_set_output(
     samples: u32,
 ) -> ShikkiStatus {
     ffi_boundary!({
-        if width == 0 || height == 0 || width > 16384 || height > 16384 {
-            return Err(FfiError::invalid(format!(
-                "image size {width}×{height}: each side must be 1 to 16384 pixels"
-            )));
-        }
+        check_image_size(width, height)?;
         if !SUPPORTED_SAMPLES.contains(&samples) {
             return Err(FfiError::invalid(format!(
                 "samples {samples}: use one of {SUPPORTED_SAMPLES:?}"

@@ -1,11 +1,15 @@
 /* error_paths — every error path of the C API returns the documented status and a non-empty
  * message, and a scene built entirely with calls (mesh and environment from caller arrays,
- * material setters, transform, lights, camera) renders. Run by ffi/tests/c_api.rs, also under
- * valgrind. Prints one line per check; exit status = number of failed checks.
+ * material setters, transform, lights, camera) renders. Hostile callers too: every handle kind
+ * used after destroy, destroyed twice, stale after its slot is reused, forged, or passed as
+ * another kind; NULL out-pointers; invalid UTF-8; sizes far beyond the limits. Run by
+ * ffi/tests/c_api.rs, also under valgrind and ASan+UBSan. Prints one line per check; exit
+ * status = number of failed checks.
  */
 #include <shikki.h>
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -26,10 +30,365 @@ static void expect(const char *what, ShikkiStatus status, ShikkiStatus want) {
 
 #define EXPECT(call, want) expect(#call, (call), (want))
 
+/* As expect, and the message must contain `needle` (the message names the problem). */
+static void expect_message(const char *what, ShikkiStatus status, ShikkiStatus want,
+                           const char *needle) {
+    const char *message = shikki_last_error();
+    if (message != NULL && strstr(message, needle) == NULL) {
+        checks++;
+        failures++;
+        printf("FAIL %s: message lacks \"%s\": %s\n", what, needle, message);
+    }
+    expect(what, status, want);
+}
+
+#define EXPECT_MESSAGE(call, want, needle) expect_message(#call, (call), (want), (needle))
+
+/* `condition` must hold. */
+static void expect_true(const char *what, int condition) {
+    checks++;
+    if (!condition) failures++;
+    printf("%s %s\n", condition ? "ok  " : "FAIL", what);
+}
+
+#define EXPECT_TRUE(condition) expect_true(#condition, (condition))
+
 /* An octahedron: 6 vertices, 8 outward-facing (counter-clockwise) triangles. */
 static const float octa_positions[] = {1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1};
 static const uint32_t octa_indices[] = {0, 2, 4, 4, 2, 1, 1, 2, 5, 5, 2, 0,
                                         4, 3, 0, 1, 3, 4, 5, 3, 1, 0, 3, 5};
+
+/* ---- Hostile handles --------------------------------------------------------------------
+ * Handles are {uint64_t id} structs: slot index + 1 in the low 32 bits, the slot's generation in
+ * the high 32 (docs/c-api.md). Every kind is tried where every other kind is expected. */
+
+enum Kind { RENDERER, ENVIRONMENT, MESH, MATERIAL, SCENE, KINDS };
+static const char *const kind_names[KINDS] = {"ShikkiRenderer", "ShikkiEnvironment", "ShikkiMesh",
+                                              "ShikkiMaterial", "ShikkiScene"};
+
+/* A live scene that environment handles are tried on. */
+static ShikkiScene probe_scene = {0};
+
+/* One call that needs a live handle of `kind`. */
+static ShikkiStatus use_as(enum Kind kind, uint64_t id) {
+    size_t n = 0;
+    switch (kind) {
+    case RENDERER: return shikki_renderer_validation_message_count((ShikkiRenderer){id}, &n);
+    case ENVIRONMENT:
+        return shikki_scene_set_environment(probe_scene, (ShikkiEnvironment){id}, 1.0, 0.0);
+    case MESH: return shikki_mesh_counts((ShikkiMesh){id}, &n, NULL);
+    case MATERIAL: return shikki_material_validate((ShikkiMaterial){id});
+    case SCENE: return shikki_scene_get_output((ShikkiScene){id}, NULL, NULL);
+    default: return SHIKKI_STATUS_PANIC;
+    }
+}
+
+static ShikkiStatus destroy_as(enum Kind kind, uint64_t id) {
+    switch (kind) {
+    case RENDERER: return shikki_renderer_destroy((ShikkiRenderer){id});
+    case ENVIRONMENT: return shikki_environment_destroy((ShikkiEnvironment){id});
+    case MESH: return shikki_mesh_destroy((ShikkiMesh){id});
+    case MATERIAL: return shikki_material_destroy((ShikkiMaterial){id});
+    case SCENE: return shikki_scene_destroy((ShikkiScene){id});
+    default: return SHIKKI_STATUS_PANIC;
+    }
+}
+
+/* A new object of `kind` (not a renderer: each one opens a Vulkan device). */
+static ShikkiStatus make(enum Kind kind, uint64_t *id) {
+    static const float rgb[6] = {1, 1, 1, 1, 1, 1};
+    ShikkiStatus status = SHIKKI_STATUS_PANIC;
+    switch (kind) {
+    case ENVIRONMENT: {
+        ShikkiEnvironment h = {0};
+        status = shikki_environment_create_rgb(2, 1, rgb, &h);
+        *id = h.id;
+        break;
+    }
+    case MESH: {
+        ShikkiMesh h = {0};
+        status = shikki_mesh_create(octa_positions, NULL, 6, octa_indices, 24, &h);
+        *id = h.id;
+        break;
+    }
+    case MATERIAL: {
+        ShikkiMaterial h = {0};
+        status = shikki_material_create_preset("smooth", &h);
+        *id = h.id;
+        break;
+    }
+    case SCENE: {
+        ShikkiScene h = {0};
+        status = shikki_scene_create(&h);
+        *id = h.id;
+        break;
+    }
+    default: break;
+    }
+    return status;
+}
+
+#define SLOT(id) ((id) & 0xffffffffULL)
+#define GENERATION(id) ((id) >> 32)
+
+/* `renderer` is live and stays live; everything made here is destroyed here. */
+static void hostile_handles(ShikkiRenderer renderer) {
+    char what[160];
+    uint64_t live[KINDS] = {renderer.id};
+    EXPECT(shikki_scene_create(&probe_scene), SHIKKI_STATUS_OK);
+    for (int k = ENVIRONMENT; k < KINDS; k++) {
+        snprintf(what, sizeof what, "make a %s", kind_names[k]);
+        expect(what, make(k, &live[k]), SHIKKI_STATUS_OK);
+    }
+
+    /* Every kind where every other kind is expected, for a call and for destroy; the message
+     * names the kind the handle really is. The object survives all of it. */
+    for (int a = 0; a < KINDS; a++) {
+        for (int b = 0; b < KINDS; b++) {
+            if (a == b) continue;
+            snprintf(what, sizeof what, "a %s used as a %s", kind_names[a], kind_names[b]);
+            expect_message(what, use_as(b, live[a]), SHIKKI_STATUS_INVALID_HANDLE, kind_names[a]);
+            snprintf(what, sizeof what, "a %s destroyed as a %s", kind_names[a], kind_names[b]);
+            expect_message(what, destroy_as(b, live[a]), SHIKKI_STATUS_INVALID_HANDLE,
+                           kind_names[a]);
+        }
+        snprintf(what, sizeof what, "the %s survives being passed as every other kind",
+                 kind_names[a]);
+        expect(what, use_as(a, live[a]), SHIKKI_STATUS_OK);
+    }
+
+    /* Forged ids: a future generation of a live slot, generation 0, a slot that does not exist,
+     * all bits set, slot field 0 with a generation. */
+    for (int k = 0; k < KINDS; k++) {
+        const uint64_t id = live[k];
+        const uint64_t forged[] = {SLOT(id) | (GENERATION(id) + 1) << 32,
+                                   SLOT(id),
+                                   0xfffffffeULL | GENERATION(id) << 32,
+                                   UINT64_MAX,
+                                   1ULL << 32};
+        for (size_t i = 0; i < sizeof forged / sizeof forged[0]; i++) {
+            snprintf(what, sizeof what, "forged %s %#llx used", kind_names[k],
+                     (unsigned long long)forged[i]);
+            expect(what, use_as(k, forged[i]), SHIKKI_STATUS_INVALID_HANDLE);
+            snprintf(what, sizeof what, "forged %s %#llx destroyed", kind_names[k],
+                     (unsigned long long)forged[i]);
+            expect(what, destroy_as(k, forged[i]), SHIKKI_STATUS_INVALID_HANDLE);
+        }
+        snprintf(what, sizeof what, "the %s survives forged neighbours", kind_names[k]);
+        expect(what, use_as(k, id), SHIKKI_STATUS_OK);
+    }
+
+    /* The zero handle ("none"): destroying it is a no-op like free(NULL); using it is an invalid
+     * handle, except as an environment, where 0 means "no environment" (documented). */
+    for (int k = 0; k < KINDS; k++) {
+        snprintf(what, sizeof what, "destroy a zero %s", kind_names[k]);
+        expect(what, destroy_as(k, 0), SHIKKI_STATUS_OK);
+        snprintf(what, sizeof what, "use a zero %s", kind_names[k]);
+        expect(what, use_as(k, 0), k == ENVIRONMENT ? SHIKKI_STATUS_OK : SHIKKI_STATUS_INVALID_HANDLE);
+    }
+
+    /* Use after destroy, double destroy, and a stale handle after its slot is reused: the slot
+     * comes back with a new generation, and neither a call nor a destroy through the old handle
+     * may reach the new object. */
+    for (int k = ENVIRONMENT; k < KINDS; k++) {
+        const uint64_t old = live[k];
+        uint64_t fresh = 0;
+        snprintf(what, sizeof what, "destroy a %s", kind_names[k]);
+        expect(what, destroy_as(k, old), SHIKKI_STATUS_OK);
+        snprintf(what, sizeof what, "use a %s after destroy", kind_names[k]);
+        expect_message(what, use_as(k, old), SHIKKI_STATUS_INVALID_HANDLE, "was destroyed");
+        snprintf(what, sizeof what, "destroy a %s twice", kind_names[k]);
+        expect_message(what, destroy_as(k, old), SHIKKI_STATUS_INVALID_HANDLE, "was destroyed");
+        snprintf(what, sizeof what, "make a %s in the freed slot", kind_names[k]);
+        expect(what, make(k, &fresh), SHIKKI_STATUS_OK);
+        snprintf(what, sizeof what, "the new %s reuses the slot with another generation",
+                 kind_names[k]);
+        expect_true(what, SLOT(fresh) == SLOT(old) && fresh != old);
+        snprintf(what, sizeof what, "use a stale %s after its slot is reused", kind_names[k]);
+        expect(what, use_as(k, old), SHIKKI_STATUS_INVALID_HANDLE);
+        snprintf(what, sizeof what, "destroy a stale %s after its slot is reused", kind_names[k]);
+        expect(what, destroy_as(k, old), SHIKKI_STATUS_INVALID_HANDLE);
+        snprintf(what, sizeof what, "the new %s survives its stale predecessor", kind_names[k]);
+        expect(what, use_as(k, fresh), SHIKKI_STATUS_OK);
+        snprintf(what, sizeof what, "destroy the new %s", kind_names[k]);
+        expect(what, destroy_as(k, fresh), SHIKKI_STATUS_OK);
+    }
+    EXPECT(shikki_scene_destroy(probe_scene), SHIKKI_STATUS_OK);
+}
+
+/* After `renderer` was destroyed: every renderer call fails cleanly, and once its slot is taken
+ * by a material, the old renderer handle neither reaches nor frees the material. */
+static void destroyed_renderer(ShikkiRenderer renderer, ShikkiScene scene) {
+    size_t n = 0;
+    uint8_t rgba[16 * 12 * 4];
+    EXPECT(shikki_renderer_validation_message_count(renderer, &n), SHIKKI_STATUS_INVALID_HANDLE);
+    EXPECT(shikki_render_rgba8(renderer, scene, rgba, sizeof rgba), SHIKKI_STATUS_INVALID_HANDLE);
+    EXPECT(shikki_render_to_file(renderer, scene, "never.png"), SHIKKI_STATUS_INVALID_HANDLE);
+    FILE *never = fopen("never.png", "rb");
+    EXPECT_TRUE(never == NULL); /* a failed render leaves no file */
+    if (never) fclose(never);
+    EXPECT(shikki_renderer_destroy(renderer), SHIKKI_STATUS_INVALID_HANDLE);
+    ShikkiMaterial tenant = {0};
+    EXPECT(shikki_material_create_preset("rough", &tenant), SHIKKI_STATUS_OK);
+    EXPECT_TRUE(SLOT(tenant.id) == SLOT(renderer.id) && tenant.id != renderer.id);
+    EXPECT_MESSAGE(shikki_renderer_destroy(renderer), SHIKKI_STATUS_INVALID_HANDLE,
+                   "was destroyed");
+    EXPECT_MESSAGE(shikki_renderer_destroy((ShikkiRenderer){tenant.id}),
+                   SHIKKI_STATUS_INVALID_HANDLE, "ShikkiMaterial");
+    EXPECT(shikki_material_validate(tenant), SHIKKI_STATUS_OK);
+    EXPECT(shikki_material_destroy(tenant), SHIKKI_STATUS_OK);
+}
+
+/* ---- NULL out-pointers: each fails before any work, and leaves no object behind. ---------- */
+static void null_out_pointers(void) {
+    static const float rgb[6] = {1, 1, 1, 1, 1, 1};
+    const size_t before = shikki_live_handle_count();
+    ShikkiRendererOptions options = {.device_name = NULL, .validation = false};
+    EXPECT_MESSAGE(shikki_renderer_create(&options, NULL), SHIKKI_STATUS_NULL_ARGUMENT, "`out`");
+    EXPECT(shikki_renderer_create(NULL, NULL), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_environment_load("builtin:studio", NULL), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_environment_create_rgb(2, 1, rgb, NULL), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_mesh_create(octa_positions, NULL, 6, octa_indices, 24, NULL),
+           SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_mesh_create(octa_positions, NULL, 6, NULL, 24, &(ShikkiMesh){0}),
+           SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_mesh_load("bowl.obj", NULL), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_mesh_load(NULL, &(ShikkiMesh){0}), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_mesh_create_builtin("sphere", NULL), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_mesh_create_builtin(NULL, &(ShikkiMesh){0}), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_material_create_toml("preset = \"smooth\"\n", NULL, NULL),
+           SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_material_load("m.toml", NULL), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_material_load(NULL, &(ShikkiMaterial){0}), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_scene_create_default(NULL), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_scene_create_toml("", NULL, NULL), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_scene_create_toml(NULL, NULL, &(ShikkiScene){0}), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_scene_load("s.toml", NULL), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_scene_load(NULL, &(ShikkiScene){0}), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT_TRUE(shikki_live_handle_count() == before);
+
+    ShikkiMaterial material = {0};
+    ShikkiScene scene = {0};
+    EXPECT(shikki_material_create_preset("smooth", &material), SHIKKI_STATUS_OK);
+    EXPECT(shikki_scene_create(&scene), SHIKKI_STATUS_OK);
+    EXPECT_MESSAGE(shikki_material_set(material, NULL, "0.1"), SHIKKI_STATUS_NULL_ARGUMENT, "`key`");
+    EXPECT_MESSAGE(shikki_material_set(material, "m", NULL), SHIKKI_STATUS_NULL_ARGUMENT, "`value`");
+    const double v[3] = {0.0, 1.0, 0.0};
+    EXPECT(shikki_scene_add_point_light(scene, NULL, v), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_scene_set_camera(scene, NULL, v, NULL, 40.0), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_scene_set_camera(scene, v, NULL, NULL, 40.0), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_scene_set_background(scene, SHIKKI_BACKGROUND_COLOR, NULL),
+           SHIKKI_STATUS_NULL_ARGUMENT);
+    /* Documented as optional: NULL is fine. */
+    EXPECT(shikki_scene_set_background(scene, SHIKKI_BACKGROUND_TRANSPARENT, NULL), SHIKKI_STATUS_OK);
+    EXPECT(shikki_scene_get_output(scene, NULL, NULL), SHIKKI_STATUS_OK);
+    EXPECT(shikki_material_set_fresnel_file(material, NULL), SHIKKI_STATUS_OK);
+    EXPECT(shikki_scene_destroy(scene), SHIKKI_STATUS_OK);
+    EXPECT(shikki_material_destroy(material), SHIKKI_STATUS_OK);
+}
+
+/* ---- Strings that are not UTF-8 (every string argument is NUL-terminated; none takes a
+ * length): INVALID_ARGUMENT naming the argument, nothing made. ----------------------------- */
+static void invalid_utf8(ShikkiRenderer renderer, ShikkiScene scene) {
+    const char *bad = "smo\xff\xfeoth"; /* 0xFF never occurs in UTF-8 */
+    const char *truncated = "bowl\xe3\x81";  /* a 3-byte sequence cut short by the NUL */
+    const size_t before = shikki_live_handle_count();
+    ShikkiMaterial material = {0};
+    ShikkiMesh mesh = {0};
+    ShikkiScene made = {0};
+    ShikkiEnvironment environment = {0};
+    ShikkiRendererOptions options = {.device_name = bad, .validation = false};
+    EXPECT_MESSAGE(shikki_renderer_create(&options, &(ShikkiRenderer){0}),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "UTF-8");
+    EXPECT_MESSAGE(shikki_material_create_preset(bad, &material), SHIKKI_STATUS_INVALID_ARGUMENT,
+                   "`name`");
+    EXPECT(shikki_material_create_toml(bad, NULL, &material), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT_MESSAGE(shikki_material_create_toml("preset = \"smooth\"\n", truncated, &material),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "`base_dir`");
+    EXPECT(shikki_material_load(truncated, &material), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_mesh_create_builtin(truncated, &mesh), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_mesh_load(bad, &mesh), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_environment_load(bad, &environment), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_scene_create_toml(bad, NULL, &made), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_scene_load(truncated, &made), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT_MESSAGE(shikki_render_to_file(renderer, scene, bad), SHIKKI_STATUS_INVALID_ARGUMENT,
+                   "`path`");
+    float pixel[4] = {0, 0, 0, 1};
+    EXPECT(shikki_image_write(pixel, 4, 1, 1, 0.0f, SHIKKI_TONE_CURVE_ACES, truncated),
+           SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT_TRUE(shikki_live_handle_count() == before);
+
+    EXPECT(shikki_material_create_preset("smooth", &material), SHIKKI_STATUS_OK);
+    EXPECT_MESSAGE(shikki_material_set(material, bad, "0.1"), SHIKKI_STATUS_INVALID_ARGUMENT,
+                   "`key`");
+    EXPECT_MESSAGE(shikki_material_set(material, "m", truncated), SHIKKI_STATUS_INVALID_ARGUMENT,
+                   "`value`");
+    EXPECT(shikki_material_set_fresnel_file(material, bad), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_material_validate(material), SHIKKI_STATUS_OK); /* unchanged by the failures */
+    EXPECT(shikki_material_destroy(material), SHIKKI_STATUS_OK);
+}
+
+/* ---- Sizes far beyond the limits: refused before any caller memory is read (the arrays here
+ * are tiny; reading as much as the sizes claim would crash) and before anything is allocated. */
+static void huge_sizes(ShikkiRenderer renderer, ShikkiScene scene) {
+    static const float rgb[3] = {1, 1, 1};
+    float pixel[4] = {0, 0, 0, 1};
+    uint8_t byte4[4] = {0};
+    const size_t before = shikki_live_handle_count();
+    ShikkiEnvironment environment = {0};
+    ShikkiMesh mesh = {0};
+    EXPECT_MESSAGE(shikki_environment_create_rgb(UINT32_MAX, UINT32_MAX, rgb, &environment),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "32768");
+    EXPECT(shikki_environment_create_rgb(65536, 1, rgb, &environment),
+           SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_environment_create_rgb(32768, 16384, rgb, &environment), /* 2^29 pixels */
+           SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_environment_create_rgb(0, 8, rgb, &environment), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT_MESSAGE(shikki_mesh_create(octa_positions, NULL, SIZE_MAX, octa_indices, 24, &mesh),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "vertex_count");
+    EXPECT(shikki_mesh_create(octa_positions, NULL, SIZE_MAX / 3, octa_indices, 24, &mesh),
+           SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_mesh_create(octa_positions, NULL, (size_t)1 << 40, octa_indices, 24, &mesh),
+           SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT_MESSAGE(shikki_mesh_create(octa_positions, NULL, 6, octa_indices, SIZE_MAX - 2, &mesh),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "index_count");
+    EXPECT(shikki_mesh_create(octa_positions, NULL, 6, octa_indices, (size_t)3 << 40, &mesh),
+           SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_mesh_create(octa_positions, NULL, 0, octa_indices, 0, &mesh),
+           SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT_MESSAGE(shikki_scene_set_output(scene, UINT32_MAX, UINT32_MAX, 1),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "16384");
+    EXPECT(shikki_scene_set_output(scene, 16385, 1, 1), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_scene_set_output(scene, 1, 0, 1), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_render_rgba32f(renderer, scene, pixel, SIZE_MAX), SHIKKI_STATUS_BUFFER_SIZE);
+    EXPECT(shikki_render_rgba8(renderer, scene, byte4, SIZE_MAX / 2), SHIKKI_STATUS_BUFFER_SIZE);
+    EXPECT_MESSAGE(shikki_image_write(pixel, 4, UINT32_MAX, UINT32_MAX, 0.0f,
+                                      SHIKKI_TONE_CURVE_ACES, "huge.png"),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "16384");
+    EXPECT(shikki_image_write(pixel, SIZE_MAX, 1, 1, 0.0f, SHIKKI_TONE_CURVE_ACES, "huge.png"),
+           SHIKKI_STATUS_BUFFER_SIZE);
+    EXPECT(shikki_image_write(pixel, 0, 0, 0, 0.0f, SHIKKI_TONE_CURVE_ACES, "empty.png"),
+           SHIKKI_STATUS_INVALID_ARGUMENT);
+    /* Non-finite numbers where a size or an amount is expected. */
+    const double eye[3] = {0, 0, 3}, target[3] = {0, 0, 0}, inf3[3] = {INFINITY, 1, 1};
+    EXPECT(shikki_scene_set_camera(scene, eye, target, NULL, NAN), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_scene_set_camera(scene, eye, target, NULL, 1e308), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_scene_add_point_light(scene, eye, inf3), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_scene_set_display(scene, INFINITY, SHIKKI_TONE_CURVE_ACES),
+           SHIKKI_STATUS_INVALID_ARGUMENT);
+    ShikkiMaterial material = {0};
+    EXPECT(shikki_material_create_preset("smooth", &material), SHIKKI_STATUS_OK);
+    EXPECT(shikki_material_set_beckmann_m(material, NAN), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_material_set_lacquer_ratio(material, INFINITY), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_material_set_beta_power(material, -INFINITY), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_material_set(material, "a", "1e999"), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_material_validate(material), SHIKKI_STATUS_OK);
+    EXPECT(shikki_material_destroy(material), SHIKKI_STATUS_OK);
+    FILE *written = fopen("huge.png", "rb");
+    EXPECT_TRUE(written == NULL);
+    if (written) fclose(written);
+    EXPECT_TRUE(shikki_live_handle_count() == before);
+}
 
 int main(void) {
     ShikkiRenderer renderer = {0};
@@ -181,9 +540,18 @@ int main(void) {
         failures++;
         printf("FAIL %zu validation message(s)\n", messages);
     }
+    hostile_handles(renderer);
+    null_out_pointers();
+    invalid_utf8(renderer, scene);
+    huge_sizes(renderer, scene);
+    /* The failures above left the scene as it was: it still renders the same bytes. */
+    uint8_t again[16 * 12 * 4];
+    EXPECT(shikki_render_rgba8(renderer, scene, again, sizeof again), SHIKKI_STATUS_OK);
+    EXPECT_TRUE(memcmp(again, ldr, sizeof ldr) == 0);
     EXPECT(shikki_renderer_destroy(renderer), SHIKKI_STATUS_OK);
     EXPECT(shikki_render_rgba32f(renderer, scene, hdr, 16 * 12 * 4), SHIKKI_STATUS_INVALID_HANDLE);
     EXPECT(shikki_renderer_destroy(renderer), SHIKKI_STATUS_INVALID_HANDLE);
+    destroyed_renderer(renderer, scene);
 
     /* The message stays until the next call on this thread; a success clears it. */
     EXPECT(shikki_material_destroy(from_toml), SHIKKI_STATUS_OK);
