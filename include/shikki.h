@@ -6,13 +6,17 @@
  * shikki_live_handle_count). On failure shikki_last_error() holds a message, valid until the
  * next shikki_* call on the same thread.
  *
- * Thread safety: every call may be made from any thread. Each object (renderer, environment,
- * mesh, material, scene) has its own lock held for the duration of a call on it, so calls on
- * different objects run in parallel and calls on the same object are serialised: a renderer
- * renders one scene at a time; use one renderer per thread to render in parallel. A scene may be
- * rendered by several renderers at once (the render takes a snapshot of it). Destroying a handle
- * that another thread is using is safe: the object is freed when that call returns. Handles are
- * generation-checked: a destroyed, foreign or wrong-kind handle gives
+ * Thread safety (docs/c-api.md, "Threads"): every call may be made from any thread. Each object
+ * (renderer, environment, mesh, material, scene) has its own lock held for the duration of a call
+ * on it, so calls on different objects run in parallel and calls on the same object are
+ * serialised (the second caller waits): a renderer renders one scene at a time; use one renderer
+ * per thread to render in parallel. A scene may be rendered by several renderers at once: each
+ * render takes a snapshot of it and checks the caller's buffer against that snapshot, so a change
+ * made during a render affects the next one. Destroying a handle that another thread is using is
+ * safe: the call in progress finishes, the object is freed when it returns, later calls give
+ * SHIKKI_STATUS_INVALID_HANDLE. shikki_last_error() is per thread. Caller arrays, strings and
+ * output buffers are used only during the call and must not be touched by another thread until it
+ * returns. Handles are generation-checked: a destroyed, stale, forged or wrong-kind handle gives
  * SHIKKI_STATUS_INVALID_HANDLE, never a crash.
  */
 
@@ -133,9 +137,9 @@ typedef struct ShikkiRenderer {
 } ShikkiRenderer;
 
 // Objects, lights, camera, environment, background and output settings of one picture. Threads:
-// changes to one scene are serialised; a render works on a snapshot taken when it starts, so a
-// change made during a render affects the next one, and several renderers may render one scene at
-// once.
+// changes to one scene are serialised; a render works on a snapshot taken when it starts (the
+// caller's buffer is checked against the same snapshot), so a change made during a render
+// affects the next one, and several renderers may render one scene at once.
 // Passed by value; 0 is never a valid handle.
 typedef struct ShikkiScene {
   uint64_t id;

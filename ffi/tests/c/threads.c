@@ -7,8 +7,9 @@
  *    the full image of one size (it renders a snapshot) or SHIKKI_STATUS_BUFFER_SIZE, never an
  *    image of one size in a buffer of another;
  * 4. two threads hammer create / use / destroy / failing calls in lock-step: each thread's
- *    shikki_last_error() holds its own message only, and stale handles stay invalid while the
- *    other thread reuses their slots;
+ *    shikki_last_error() holds its own message only, stale handles stay invalid while the
+ *    other thread reuses their slots, and of two simultaneous destroys of one handle exactly
+ *    one succeeds;
  * 5. a renderer and a scene destroyed while another thread renders with them: the render
  *    finishes (or reports INVALID_HANDLE if it came too late), nothing crashes or leaks.
  *
@@ -214,6 +215,10 @@ typedef struct {
     pthread_barrier_t *step;
 } Hammer;
 
+/* One material per round that both hammer threads destroy at once: exactly one may succeed. */
+static ShikkiMaterial contested[HAMMER_ROUNDS];
+static ShikkiStatus contested_status[2][HAMMER_ROUNDS];
+
 static int contains(const char *text, const char *needle) { return strstr(text, needle) != NULL; }
 
 static void *hammer_thread(void *arg) {
@@ -260,6 +265,7 @@ static void *hammer_thread(void *arg) {
         expect("destroy environment", shikki_environment_destroy(environment), SHIKKI_STATUS_OK);
         expect("destroy material", shikki_material_destroy(material), SHIKKI_STATUS_OK);
         pthread_barrier_wait(self->step);
+        contested_status[self->index][round] = shikki_material_destroy(contested[round]);
         expect("stale mesh", shikki_mesh_counts(mesh, NULL, NULL), SHIKKI_STATUS_INVALID_HANDLE);
         expect("stale material", shikki_material_destroy(material), SHIKKI_STATUS_INVALID_HANDLE);
         expect("stale environment",
@@ -347,11 +353,22 @@ int main(void) {
     /* 4. The hammer. */
     pthread_barrier_t step;
     pthread_barrier_init(&step, NULL, 2);
+    for (int r = 0; r < HAMMER_ROUNDS; r++)
+        expect("contested material", shikki_material_create_preset("rough", &contested[r]),
+               SHIKKI_STATUS_OK);
     Hammer hammers[2] = {{0, &step}, {1, &step}};
     pthread_t hammer[2];
     for (int i = 0; i < 2; i++) pthread_create(&hammer[i], NULL, hammer_thread, &hammers[i]);
     for (int i = 0; i < 2; i++) pthread_join(hammer[i], NULL);
     pthread_barrier_destroy(&step);
+    int one_winner = 1;
+    for (int r = 0; r < HAMMER_ROUNDS; r++) {
+        ShikkiStatus x = contested_status[0][r], y = contested_status[1][r];
+        one_winner &= (x == SHIKKI_STATUS_OK && y == SHIKKI_STATUS_INVALID_HANDLE) ||
+                      (y == SHIKKI_STATUS_OK && x == SHIKKI_STATUS_INVALID_HANDLE);
+    }
+    check("a handle destroyed by two threads at once: one OK, one INVALID_HANDLE", one_winner,
+          NULL);
     check("hammer: handles left alive", shikki_live_handle_count() == 4, NULL); /* a, b, sky, scene */
 
     printf("info hammer: %.1f s\n", lap());
