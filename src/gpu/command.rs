@@ -274,17 +274,7 @@ impl Recorder<'_> {
     /// Copies every layer of a single-sampled image (in TransferSrc layout) to the start of
     /// `buffer`, tightly packed, layer after layer, row 0 first.
     pub fn copy_image_to_buffer(&mut self, image: &Image, buffer: &Buffer) {
-        let region = whole_image_region(image);
-        // SAFETY: recording; the buffer is large enough (image.byte_size()) and live.
-        unsafe {
-            self.device.cmd_copy_image_to_buffer(
-                self.cmd,
-                image.raw,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                buffer.raw,
-                std::slice::from_ref(&region),
-            )
-        };
+        self.copy_image_rows_to_buffer(image, image.desc().height, buffer, 0);
     }
 
     /// Copies the first `rows` rows of a single-sampled 2D image (in TransferSrc layout) into
