@@ -32,6 +32,7 @@ void main() {
     p.diffuse_b_lo = params.material_lo.y;
     p.lacquer_g = params.material.w;
     p.albedo = params.albedo_count.xyz;
+    p.fresnel_first = 0;
     p.fresnel_count = int(params.albedo_count.w);
     vec3 n = directions[3u * row + 0u].xyz;
     vec3 v = directions[3u * row + 1u].xyz;

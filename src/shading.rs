@@ -43,20 +43,41 @@ fn split_f64(x: f64) -> (f32, f32) {
     (hi, (x - f64::from(hi)) as f32)
 }
 
+/// One object's material as shade_body.glsl's `object_material[4 * object + i]`: the three vec4s
+/// of [`material_vec4s`] with the index of the object's first Fresnel knot in the concatenated
+/// knot buffer (`material_lo.z`), then (β_normal, β_grazing, p, 0) of SPEC §4's β(nv).
+pub fn object_material_vec4s(
+    brdf: &BrdfParams,
+    fresnel: &FresnelTable,
+    first_knot: usize,
+    view_blur: &ViewBlur,
+) -> [[f32; 4]; 4] {
+    let [material, albedo_count, mut material_lo] = material_vec4s(brdf, fresnel);
+    // Exact as f32: the renderer limits the knots of one draw far below 2^24.
+    material_lo[2] = first_knot as f32;
+    [
+        material,
+        albedo_count,
+        material_lo,
+        [
+            view_blur.beta_normal as f32,
+            view_blur.beta_grazing as f32,
+            view_blur.beta_power as f32,
+            0.0,
+        ],
+    ]
+}
+
 /// `Frame` in shaders/common/frame.glsl (std140; every member is a multiple of 16 bytes, so the
-/// C layout is the std140 layout).
+/// C layout is the std140 layout): what every object of a draw shares.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct FrameUniforms {
     pub view_projection: [f32; 16],
     pub eye: [f32; 4],
-    pub material: [f32; 4],
-    pub albedo_count: [f32; 4],
-    pub material_lo: [f32; 4],
     pub light_count: [i32; 4],
     pub light_vector: [[f32; 4]; MAX_LIGHTS],
     pub light_color: [[f32; 4]; MAX_LIGHTS],
-    pub view_blur: [f32; 4],
     pub environment: [i32; 4],
     pub layer_beta: [[f32; 4]; MAX_ENV_LAYERS / 4],
     pub camera_right: [f32; 4],
@@ -65,6 +86,10 @@ pub struct FrameUniforms {
     pub camera_params: [f32; 4],
     /// (0, first image row of the render target, 0, 0): the draw renders tall images in strips.
     pub strip_offset: [f32; 4],
+    /// (object index + 1 in the G-buffer pass, background kind, 0, 0): see [`FrameUniforms::BACKGROUND_ENVIRONMENT`].
+    pub draw_info: [i32; 4],
+    /// The constant background (linear rgba; transparent is all 0).
+    pub background_color: [f32; 4],
 }
 
 /// Most environment layers a draw can sample (`MAX_ENV_LAYERS` in frame.glsl).
@@ -75,7 +100,6 @@ pub const MAX_ENV_LAYERS: usize = crate::environment::params::MAX_LAYERS as usiz
 pub struct EnvironmentUniforms {
     pub enabled: bool,
     pub layer_betas: Vec<f64>,
-    pub view_blur: ViewBlur,
 }
 
 fn vec4(v: glam::DVec3, w: f32) -> [f32; 4] {
@@ -83,17 +107,19 @@ fn vec4(v: glam::DVec3, w: f32) -> [f32; 4] {
 }
 
 impl FrameUniforms {
-    /// Packs one draw's camera, lights, material and environment. `lights.len()` must be
-    /// ≤ MAX_LIGHTS (checked by the renderer before this is called; extra lights are ignored here).
-    #[allow(clippy::too_many_arguments)]
+    /// `draw_info.y`: uncovered samples show `background_color`.
+    pub const BACKGROUND_CONSTANT: i32 = 0;
+    /// `draw_info.y`: uncovered samples show the sharp environment along the pixel's ray.
+    pub const BACKGROUND_ENVIRONMENT: i32 = 1;
+
+    /// Packs one draw's camera, lights and environment. `lights.len()` must be ≤ MAX_LIGHTS
+    /// (checked by the renderer before this is called; extra lights are ignored here).
     pub fn new(
         camera: &Camera,
         width: u32,
         height: u32,
         scene_radius: f64,
         lights: &[Light],
-        brdf: &BrdfParams,
-        fresnel: &FresnelTable,
         environment: &EnvironmentUniforms,
     ) -> Self {
         let (right, up, forward) = camera.basis();
@@ -106,8 +132,6 @@ impl FrameUniforms {
         {
             layer_beta[k / 4][k % 4] = *beta as f32;
         }
-        let blur = &environment.view_blur;
-        let [material, albedo_count, material_lo] = material_vec4s(brdf, fresnel);
         let mut frame = FrameUniforms {
             view_projection: camera
                 .view_projection(width, height, scene_radius)
@@ -118,18 +142,9 @@ impl FrameUniforms {
                 camera.eye.z as f32,
                 1.0,
             ],
-            material,
-            albedo_count,
-            material_lo,
             light_count: [lights.len().min(MAX_LIGHTS) as i32, 0, 0, 0],
             light_vector: [[0.0; 4]; MAX_LIGHTS],
             light_color: [[0.0; 4]; MAX_LIGHTS],
-            view_blur: [
-                blur.beta_normal as f32,
-                blur.beta_grazing as f32,
-                blur.beta_power as f32,
-                0.0,
-            ],
             environment: [
                 i32::from(environment.enabled),
                 environment.layer_betas.len().min(MAX_ENV_LAYERS) as i32,
@@ -147,6 +162,8 @@ impl FrameUniforms {
                 height as f32,
             ],
             strip_offset: [0.0; 4],
+            draw_info: [0; 4],
+            background_color: [0.0; 4],
         };
         for (i, light) in lights.iter().take(MAX_LIGHTS).enumerate() {
             let (vector, color) = match *light {

@@ -13,13 +13,9 @@ layout(constant_id = 0) const int ENV_LAYER_COUNT = MAX_ENV_LAYERS;
 layout(std140, set = 0, binding = 0) uniform Frame {
     mat4 view_projection;
     vec4 eye;              // xyz: camera position
-    vec4 material;         // m, a, b, g(r)
-    vec4 albedo_count;     // k_d.rgb, fresnel knot count
-    vec4 material_lo;      // (a_lo, b_lo, 0, 0): what rounding a and b to f32 lost
     ivec4 light_count;     // x: number of lights
     vec4 light_vector[MAX_LIGHTS]; // w = 0: directional, xyz towards the light; w = 1: point, xyz position
     vec4 light_color[MAX_LIGHTS];  // rgb: irradiance E (directional) or intensity I (point)
-    vec4 view_blur;        // β_normal, β_grazing, p (SPEC §4 β(nv)), 0
     ivec4 environment;     // x: 1 if an environment lights the scene, y: number of layers K
     vec4 layer_beta[MAX_ENV_LAYERS / 4]; // β_k, four per vec4
     vec4 camera_right;     // camera basis (world), for background rays
@@ -27,6 +23,8 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 camera_back;      // −view direction
     vec4 camera_params;    // tan(fov/2), aspect W/H, width, height
     vec4 strip_offset;     // y: image row of the target's row 0 (tall images render in strips)
+    ivec4 draw_info;       // x: object index + 1 (G-buffer pass); y: background, 0 constant, 1 environment
+    vec4 background_color; // the constant background (rgba; transparent is 0)
 } frame;
 
 layout(set = 0, binding = 2) uniform samplerCube env_layers[MAX_ENV_LAYERS];
@@ -87,6 +85,26 @@ vec3 prefiltered_radiance(vec3 dir, float beta) {
 // The sharp layer along `dir` (the background).
 vec3 sharp_radiance(vec3 dir) {
     return textureLod(env_layers[0], dir, 0.0).rgb;
+}
+
+// The primary ray through `pixel` (whole-image coordinates of a pixel centre, (i + ½, j + ½),
+// row 0 at the top): SPEC §1's camera rays.
+vec3 camera_ray(vec2 pixel) {
+    float tan_half = frame.camera_params.x;
+    float aspect = frame.camera_params.y;
+    vec2 size = frame.camera_params.zw;
+    float x = (2.0 * pixel.x / size.x - 1.0) * tan_half * aspect;
+    float y = (1.0 - 2.0 * pixel.y / size.y) * tan_half;
+    return normalize(x * frame.camera_right.xyz + y * frame.camera_up.xyz - frame.camera_back.xyz);
+}
+
+// What pixels no mesh covers show (SPEC §1 camera ray for the environment): frame.draw_info.y and
+// frame.background_color.
+vec4 background_radiance(vec2 pixel) {
+    if (frame.draw_info.y == 1) {
+        return vec4(sharp_radiance(camera_ray(pixel)), 1.0);
+    }
+    return frame.background_color;
 }
 
 #endif

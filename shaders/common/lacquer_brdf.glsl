@@ -26,6 +26,7 @@ struct LacquerParams {
     float diffuse_b_lo;
     float lacquer_g;   // g(r), evaluated on the host
     vec3 albedo;       // k_d
+    int fresnel_first; // index of the table's first knot in fresnel_knots (tables are concatenated)
     int fresnel_count; // number of knots
 };
 
@@ -78,8 +79,9 @@ float view_factor(LacquerParams p, vec2 nv) {
     return f;
 }
 
-// F(θ): linear interpolation in the table; θ in degrees, clamped to [0, 90].
-vec3 fresnel_table(float theta_deg, int count) {
+// F(θ): linear interpolation in the table of `count` knots from fresnel_knots[first]; θ in
+// degrees, clamped to [0, 90].
+vec3 fresnel_table(float theta_deg, int first, int count) {
     float theta = clamp(theta_deg, 0.0, 90.0);
     // The interval is [lo, lo + 1] with lo the last knot ≤ θ among 0..count-2. Evenly spaced
     // tables (every built-in one: a knot per degree) are indexed directly; the guess is checked
@@ -87,10 +89,10 @@ vec3 fresnel_table(float theta_deg, int count) {
     // to the binary search, so the result is the search's exactly. Why: the search is a divergent
     // loop of dependent buffer reads, run four times per fragment.
     int last = count - 2;
-    float step = fresnel_knots[1].x - fresnel_knots[0].x;
+    float step = fresnel_knots[first + 1].x - fresnel_knots[first + 0].x;
     int lo = clamp(int(theta / step), 0, last);
-    bool found = fresnel_knots[lo].x <= theta
-        && (lo == last || fresnel_knots[lo + 1].x > theta);
+    bool found = fresnel_knots[first + lo].x <= theta
+        && (lo == last || fresnel_knots[first + lo + 1].x > theta);
     int hi = lo + 1;
     if (!found) {
         // Binary search for the last knot with angle <= theta (log2(91) ≈ 7 steps).
@@ -98,15 +100,15 @@ vec3 fresnel_table(float theta_deg, int count) {
         hi = count - 1;
         while (hi - lo > 1) {
             int mid = (lo + hi) / 2;
-            if (fresnel_knots[mid].x <= theta) {
+            if (fresnel_knots[first + mid].x <= theta) {
                 lo = mid;
             } else {
                 hi = mid;
             }
         }
     }
-    vec4 k0 = fresnel_knots[lo];
-    vec4 k1 = fresnel_knots[hi];
+    vec4 k0 = fresnel_knots[first + lo];
+    vec4 k1 = fresnel_knots[first + hi];
     float span = k1.x - k0.x;
     float t = span > 0.0 ? clamp((theta - k0.x) / span, 0.0, 1.0) : 0.0;
     return mix(k0.yzw, k1.yzw, t);
@@ -163,7 +165,7 @@ vec3 lacquer_brdf_view(LacquerParams p, vec3 n, vec3 v, vec3 l, vec2 nv2, vec3 f
     float vh = dot(v, h);
     float d = beckmann_d(n, h, nh, p.beckmann_m);
     float g = cook_torrance_g(nh, nv, nl, vh);
-    vec3 f = fresnel_table(angle_deg_of_cos(vh), p.fresnel_count);
+    vec3 f = fresnel_table(angle_deg_of_cos(vh), p.fresnel_first, p.fresnel_count);
     vec3 f_spec = f * (d * g / (4.0 * nv * nl));
     return f_diff + f_spec;
 }

@@ -26,11 +26,13 @@ impl ImageUse {
 
 /// The attachments of one dynamic-rendering pass.
 pub struct RenderTargets<'a> {
-    /// Multisampled (or single-sampled) colour target, cleared to `clear_color`.
-    pub color: &'a Image,
-    /// Single-sampled image the colour is resolved into (averaged) when `color` is multisampled.
+    /// Multisampled (or single-sampled) colour targets in location order, each cleared to
+    /// `clear_color`; at least one.
+    pub colors: &'a [&'a Image],
+    /// Single-sampled image the first colour is resolved into (averaged) when it is multisampled.
     pub resolve: Option<&'a Image>,
-    pub depth: &'a Image,
+    /// Cleared to 1; None for a pass without depth (its colour targets may differ in samples).
+    pub depth: Option<&'a Image>,
     pub clear_color: [f32; 4],
 }
 
@@ -104,53 +106,66 @@ impl Recorder<'_> {
     /// viewport and scissor covering the whole target. The images must already be in the
     /// attachment layouts.
     pub fn begin_rendering(&mut self, targets: &RenderTargets<'_>) {
-        let desc = targets.color.desc();
-        let extent = vk::Extent2D {
-            width: desc.width,
-            height: desc.height,
+        // The render area is the first colour target (or the depth target without colour).
+        let extent = match (targets.colors.first().copied(), targets.depth) {
+            (Some(image), _) | (None, Some(image)) => vk::Extent2D {
+                width: image.desc().width,
+                height: image.desc().height,
+            },
+            (None, None) => vk::Extent2D::default(),
         };
-        let mut color = vk::RenderingAttachmentInfo::default()
-            .image_view(targets.color.view)
-            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(vk::ClearValue {
-                color: vk::ClearColorValue {
-                    float32: targets.clear_color,
-                },
-            });
-        if let Some(resolve) = targets.resolve {
-            color = color
+        let mut colors: Vec<vk::RenderingAttachmentInfo> = targets
+            .colors
+            .iter()
+            .map(|image| {
+                vk::RenderingAttachmentInfo::default()
+                    .image_view(image.view)
+                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .load_op(vk::AttachmentLoadOp::CLEAR)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .clear_value(vk::ClearValue {
+                        color: vk::ClearColorValue {
+                            float32: targets.clear_color,
+                        },
+                    })
+            })
+            .collect();
+        if let (Some(resolve), Some(first)) = (targets.resolve, colors.first_mut()) {
+            *first = first
                 .resolve_mode(vk::ResolveModeFlags::AVERAGE)
                 .resolve_image_view(resolve.view)
                 .resolve_image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
                 // The multisampled samples are not needed after the resolve.
                 .store_op(vk::AttachmentStoreOp::DONT_CARE);
         }
-        let depth = vk::RenderingAttachmentInfo::default()
-            .image_view(targets.depth.view)
-            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::DONT_CARE)
-            .clear_value(vk::ClearValue {
-                depth_stencil: vk::ClearDepthStencilValue {
-                    depth: 1.0,
-                    stencil: 0,
-                },
-            });
-        let info = vk::RenderingInfo::default()
+        let depth = targets.depth.map(|depth| {
+            vk::RenderingAttachmentInfo::default()
+                .image_view(depth.view)
+                .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::DONT_CARE)
+                .clear_value(vk::ClearValue {
+                    depth_stencil: vk::ClearDepthStencilValue {
+                        depth: 1.0,
+                        stencil: 0,
+                    },
+                })
+        });
+        let mut info = vk::RenderingInfo::default()
             .render_area(vk::Rect2D {
                 offset: vk::Offset2D { x: 0, y: 0 },
                 extent,
             })
             .layer_count(1)
-            .color_attachments(std::slice::from_ref(&color))
-            .depth_attachment(&depth);
+            .color_attachments(&colors);
+        if let Some(depth) = &depth {
+            info = info.depth_attachment(depth);
+        }
         let viewport = vk::Viewport {
             x: 0.0,
             y: 0.0,
-            width: desc.width as f32,
-            height: desc.height as f32,
+            width: extent.width as f32,
+            height: extent.height as f32,
             min_depth: 0.0,
             max_depth: 1.0,
         };

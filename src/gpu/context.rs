@@ -230,7 +230,19 @@ impl GpuContext {
         bindings: &[Binding],
         push_constant_size: u32,
     ) -> Result<ComputePipeline, GpuError> {
-        ComputePipeline::new(&self.shared, name, spirv, bindings, push_constant_size)
+        ComputePipeline::new(&self.shared, name, spirv, bindings, push_constant_size, &[])
+    }
+
+    /// [`create_compute_pipeline`](Self::create_compute_pipeline) with 32-bit specialization
+    /// constants: entry i sets `constant_id = i`.
+    pub fn create_specialized_compute_pipeline(
+        &self,
+        name: &'static str,
+        spirv: &[u8],
+        bindings: &[Binding],
+        constants: &[u32],
+    ) -> Result<ComputePipeline, GpuError> {
+        ComputePipeline::new(&self.shared, name, spirv, bindings, 0, constants)
     }
 
     pub fn create_graphics_pipeline(

@@ -11,6 +11,29 @@ pub enum Format {
     Depth32Float,
 }
 
+/// The depth test of a pipeline: a fragment passes when `fragment depth <compare> stored depth`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DepthTest {
+    pub compare: DepthCompare,
+    /// Whether passing fragments write their depth.
+    pub write: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthCompare {
+    Less,
+    LessOrEqual,
+    Greater,
+}
+
+pub(crate) fn compare_op(compare: DepthCompare) -> vk::CompareOp {
+    match compare {
+        DepthCompare::Less => vk::CompareOp::LESS,
+        DepthCompare::LessOrEqual => vk::CompareOp::LESS_OR_EQUAL,
+        DepthCompare::Greater => vk::CompareOp::GREATER,
+    }
+}
+
 /// How a piece of GPU memory was last touched or will next be touched; a barrier goes from one
 /// `Access` to another. Each maps to one (stage, access) pair of synchronization2.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

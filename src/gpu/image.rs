@@ -55,6 +55,11 @@ impl ImageDesc {
             cube: false,
         }
     }
+    /// A 2D colour render target that compute shaders read afterwards (a G-buffer).
+    pub fn sampled_target(name: &str, width: u32, height: u32, samples: u32) -> Self {
+        Self::color_target(name, width, height, samples)
+            .usage(ImageUsage::COLOR_ATTACHMENT | ImageUsage::SAMPLED)
+    }
     pub fn depth_target(name: &str, width: u32, height: u32, samples: u32) -> Self {
         Self {
             name: name.into(),

@@ -41,7 +41,7 @@ pub use adapter::AdapterInfo;
 pub use buffer::{Buffer, BufferDesc, BufferUsage, MemoryUse};
 pub use command::{ImageUse, Recorder, RenderTargets};
 pub use context::{ContextOptions, GpuContext};
-pub use conv::{Access, Format, Layout};
+pub use conv::{Access, DepthCompare, DepthTest, Format, Layout};
 pub use debug::ValidationLog;
 pub use error::GpuError;
 pub use image::{Image, ImageDesc, ImageUsage, Sampler};

@@ -5,7 +5,7 @@
 //! their own, so a set and its pool live and die together.
 
 use super::buffer::Buffer;
-use super::conv::{self, Format};
+use super::conv::{self, DepthTest, Format};
 use super::device::DeviceShared;
 use super::error::{GpuError, VkResultExt};
 use super::image::{Image, Sampler};
@@ -156,6 +156,18 @@ impl Drop for ShaderModule<'_> {
     }
 }
 
+/// Map entries for `count` 32-bit specialization constants packed in order: entry i sets
+/// `constant_id = i`.
+fn specialization_entries(count: usize) -> Vec<vk::SpecializationMapEntry> {
+    (0..count)
+        .map(|i| vk::SpecializationMapEntry {
+            constant_id: i as u32,
+            offset: (i * 4) as u32,
+            size: 4,
+        })
+        .collect()
+}
+
 /// A compute pipeline.
 pub struct ComputePipeline {
     pub(crate) raw: vk::Pipeline,
@@ -169,6 +181,7 @@ impl ComputePipeline {
         spirv: &[u8],
         bindings: &[Binding],
         push_constant_size: u32,
+        constants: &[u32],
     ) -> Result<Self, GpuError> {
         let layout = PipelineLayout::new(
             shared,
@@ -177,10 +190,15 @@ impl ComputePipeline {
             push_constant_size,
         )?;
         let module = ShaderModule::new(&shared.device, name, spirv)?;
+        let constant_entries = specialization_entries(constants.len());
+        let specialization = vk::SpecializationInfo::default()
+            .map_entries(&constant_entries)
+            .data(bytemuck::cast_slice(constants));
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module.raw)
-            .name(c"main");
+            .name(c"main")
+            .specialization_info(&specialization);
         let info = vk::ComputePipelineCreateInfo::default()
             .stage(stage)
             .layout(layout.raw);
@@ -227,17 +245,19 @@ pub struct GraphicsPipelineDesc<'a> {
     pub bindings: &'a [Binding],
     pub vertex_stride: u32,
     pub vertex_attributes: &'a [VertexAttribute],
-    pub color_format: Format,
-    pub depth_format: Format,
+    /// One format per colour attachment, in location order.
+    pub color_formats: &'a [Format],
+    /// None: the pipeline draws in passes without a depth attachment.
+    pub depth_format: Option<Format>,
     pub samples: u32,
-    /// Depth test (less) and write; off for full-screen passes such as the background.
-    pub depth_test: bool,
+    /// None: no depth test (full-screen passes such as the background).
+    pub depth_test: Option<DepthTest>,
     /// The fragment stage's 32-bit specialization constants: entry i sets `constant_id = i`.
     pub fragment_constants: &'a [u32],
 }
 
 /// A graphics pipeline for dynamic rendering (no render pass objects), with dynamic viewport and
-/// scissor, optional depth test (less), no culling (the BRDF is zero for back faces: nv <= 0).
+/// scissor, an optional depth test, no culling (the BRDF is zero for back faces: nv <= 0).
 pub struct GraphicsPipeline {
     pub(crate) raw: vk::Pipeline,
     pub(crate) layout: PipelineLayout,
@@ -256,13 +276,7 @@ impl GraphicsPipeline {
         )?;
         let vertex = ShaderModule::new(&shared.device, desc.name, desc.vertex_spirv)?;
         let fragment = ShaderModule::new(&shared.device, desc.name, desc.fragment_spirv)?;
-        let constant_entries: Vec<vk::SpecializationMapEntry> = (0..desc.fragment_constants.len())
-            .map(|i| vk::SpecializationMapEntry {
-                constant_id: i as u32,
-                offset: (i * 4) as u32,
-                size: 4,
-            })
-            .collect();
+        let constant_entries = specialization_entries(desc.fragment_constants.len());
         let specialization = vk::SpecializationInfo::default()
             .map_entries(&constant_entries)
             .data(bytemuck::cast_slice(desc.fragment_constants));
@@ -318,20 +332,33 @@ impl GraphicsPipeline {
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(conv::sample_count_flag(desc.samples));
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(desc.depth_test)
-            .depth_write_enable(desc.depth_test)
-            .depth_compare_op(vk::CompareOp::LESS);
-        let blend_attachment = vk::PipelineColorBlendAttachmentState::default()
-            .blend_enable(false)
-            .color_write_mask(vk::ColorComponentFlags::RGBA);
-        let blend = vk::PipelineColorBlendStateCreateInfo::default()
-            .attachments(std::slice::from_ref(&blend_attachment));
+            .depth_test_enable(desc.depth_test.is_some())
+            .depth_write_enable(desc.depth_test.is_some_and(|t| t.write))
+            .depth_compare_op(
+                desc.depth_test
+                    .map_or(vk::CompareOp::ALWAYS, |t| conv::compare_op(t.compare)),
+            );
+        let blend_attachments = vec![
+            vk::PipelineColorBlendAttachmentState::default()
+                .blend_enable(false)
+                .color_write_mask(vk::ColorComponentFlags::RGBA);
+            desc.color_formats.len()
+        ];
+        let blend =
+            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let color_formats = [conv::vk_format(desc.color_format)];
+        let color_formats: Vec<vk::Format> = desc
+            .color_formats
+            .iter()
+            .map(|&f| conv::vk_format(f))
+            .collect();
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(&color_formats)
-            .depth_attachment_format(conv::vk_format(desc.depth_format));
+            .depth_attachment_format(
+                desc.depth_format
+                    .map_or(vk::Format::UNDEFINED, conv::vk_format),
+            );
         let info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&stages)
             .vertex_input_state(&vertex_input)

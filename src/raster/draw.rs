@@ -1,29 +1,35 @@
-//! The GPU draw: a mesh shaded with the lacquer BRDF (lacquer.frag) into an offscreen HDR target,
-//! lit by point/directional lights and the prefiltered environment, over a background (the sharp
-//! environment, a colour, or transparent), resolved (MSAA) and read back as an [`HdrImage`].
+//! The GPU draw: meshes shaded with the lacquer BRDF, lit by point/directional lights and the
+//! prefiltered environment, over a background (the sharp environment, a colour, or transparent),
+//! averaged over the MSAA samples and read back as an [`HdrImage`].
 //!
-//! Per draw: write uniforms and Fresnel knots → transition targets → background pass → mesh pass
-//! → resolve → copy to a readback buffer → barrier to host. Kept between draws: each pipeline
-//! (built on first use, so a command builds only the ones it draws with), the sampler, the black
-//! stand-in environment, the render targets and readback buffer of the last size
-//! (`draw_targets.rs`) and each object slot's uniform and knot buffers. Meshes are uploaded per
-//! draw by [`LacquerRenderer::render`]; callers that draw the same mesh again (the scene renderer)
-//! upload a [`GpuMesh`] once and use [`LacquerRenderer::render_meshes`].
+//! Per draw: write the frame uniforms, the objects' materials and their Fresnel knots → G-buffer
+//! pass (gbuffer.frag: each covered sample keeps its interpolated position, normal and object) →
+//! shading pass (a full-screen triangle, shade.frag / shade_ms.frag: each pixel's distinct surfaces
+//! shaded once, uncovered samples given the background, the samples averaged) → copy to the
+//! readback buffer → barrier to host. The result is what forward shading and an MSAA resolve give, without llvmpipe shading
+//! whole 4×4 blocks per small triangle and every hidden surface (BENCHMARKS.md). The benchmark's
+//! trivial shader (`MeshShading::Trivial`) is still drawn forward: it is the rasteriser's floor.
+//!
+//! Kept between draws: each pipeline (built on first use, so a command builds only the ones it
+//! draws with), the sampler, the black stand-in environment, the render targets and readback
+//! buffer of the last size (`draw_targets.rs`) and the uniform, material and knot buffers. Meshes
+//! are uploaded per draw by [`LacquerRenderer::render`]; callers that draw the same mesh again
+//! (the scene renderer) upload a [`GpuMesh`] once and use [`LacquerRenderer::render_meshes`].
 
 use crate::environment::gpu::GpuEnvironment;
 use crate::environment::params::ViewBlur;
 use crate::environment::{CubeImage, PrefilteredEnvironment};
 use crate::gpu::{
-    Binding, BindingKind, Buffer, BufferUsage, DescriptorSet, Format, GpuContext, GraphicsPipeline,
-    GraphicsPipelineDesc, Image, Resource, Sampler, TimestampPool,
+    Binding, BindingKind, Buffer, BufferUsage, DepthCompare, DepthTest, DescriptorSet, Format,
+    GpuContext, GraphicsPipeline, GraphicsPipelineDesc, Image, Resource, Sampler, TimestampPool,
 };
 use crate::model::{BrdfParams, FresnelTable};
 use crate::output::HdrImage;
 use crate::raster::camera::Camera;
 use crate::raster::draw_record::{
-    record_and_submit, timings_from, RecordedDraw, Strip, TIMESTAMPS,
+    record_and_submit, timings_from, Passes, RecordedDraw, Strip, TIMESTAMPS,
 };
-use crate::raster::draw_targets::TargetCache;
+use crate::raster::draw_targets::{Attachments, TargetCache, TargetKind};
 use crate::raster::gpu_mesh::{upload, GpuMesh, VERTEX_ATTRIBUTES, VERTEX_STRIDE};
 use crate::raster::lights::{Light, MAX_LIGHTS};
 use crate::raster::mesh::Mesh;
@@ -84,36 +90,56 @@ pub struct DrawScene<'a> {
     pub background: Background,
 }
 
-const BINDINGS: [Binding; 4] = [
+/// The graphics passes' set: frame uniforms and the environment (background.frag samples it).
+const GRAPHICS_BINDINGS: [Binding; 3] = [
+    Binding::new(0, BindingKind::UniformBuffer),
+    Binding::array(2, BindingKind::SampledImage, MAX_ENV_LAYERS as u32),
+    Binding::new(3, BindingKind::SampledImage),
+];
+
+/// shade_body.glsl's set: the frame, the Fresnel knots, the environment, the materials and the
+/// G-buffer.
+const SHADE_BINDINGS: [Binding; 7] = [
     Binding::new(0, BindingKind::UniformBuffer),
     Binding::new(1, BindingKind::StorageBuffer),
     Binding::array(2, BindingKind::SampledImage, MAX_ENV_LAYERS as u32),
     Binding::new(3, BindingKind::SampledImage),
+    Binding::new(4, BindingKind::StorageBuffer),
+    Binding::new(5, BindingKind::SampledImage),
+    Binding::new(6, BindingKind::SampledImage),
 ];
 
 /// The fragment shader of the mesh pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum MeshShading {
-    /// lacquer.frag: the model (every real render).
+    /// The lacquer model (every real render): G-buffer pass + shading pass.
     #[default]
     Lacquer,
-    /// trivial.frag: a constant colour, the rasteriser's floor for the same geometry (benchmarks).
+    /// trivial.frag drawn forward: a constant colour, the rasteriser's floor for the same
+    /// geometry (benchmarks).
     Trivial,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 enum PipelineKind {
-    Mesh(MeshShading),
+    GBuffer,
+    /// The shading pass's first draw (coverage_body.glsl); keyed by the G-buffer's sample count,
+    /// draws single-sampled.
+    Coverage,
+    /// The shading pass's second draw (shade_body.glsl); keyed like Coverage.
+    Shade,
+    Trivial,
+    /// The background of a forward draw.
     Background,
 }
 
 /// GPU time of one draw's passes from timestamp queries, in seconds.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DrawTimings {
-    /// The rendering pass: background (if any), mesh draws, the end of the pass and the MSAA
-    /// resolve.
+    /// The drawing: for the lacquer draw the G-buffer pass and the shading pass; for the forward
+    /// draw the background (if any), the mesh draws, the end of the pass and the MSAA resolve.
     pub pass: f64,
-    /// Resolved image → readback buffer.
+    /// The image (shaded or resolved) → readback buffer.
     pub copy_out: f64,
     /// From the first command to the last.
     pub total: f64,
@@ -127,16 +153,51 @@ pub struct DrawOptions {
     pub timed: bool,
 }
 
-/// The per-object buffers of one draw slot, rewritten by every draw (the previous draw has
-/// finished: `submit_and_wait` waits on its fence before returning).
-struct ObjectSlot {
-    frame: Buffer,
-    knots: Buffer,
+/// Fresnel knots the knot buffer holds before it must grow (the built-in tables have 91 each).
+const INITIAL_KNOTS: usize = 512;
+/// Objects the material buffer holds before it must grow.
+const INITIAL_OBJECTS: usize = 8;
+/// Most Fresnel knots of one draw, all objects together: shade_body.glsl receives each table's
+/// first knot as an f32, exact below 2^24.
+pub const MAX_DRAW_KNOTS: usize = 1 << 24;
+
+/// The buffers the draws write, rewritten by every draw (the previous draw has finished:
+/// `submit_and_wait` waits on its fence before returning) and grown when a draw needs more.
+#[derive(Default)]
+struct DrawBuffers {
+    /// The shared frame uniforms of the background and shading passes.
+    scene_frame: Option<Buffer>,
+    /// Object i's frame uniforms for the G-buffer or forward pass (`draw_info.x` = i + 1).
+    object_frames: Vec<Buffer>,
+    /// Every object's Fresnel table, concatenated.
+    knots: Option<Buffer>,
+    /// [`shading::object_material_vec4s`] of every object.
+    materials: Option<Buffer>,
 }
 
-/// Fresnel tables up to this many knots fit a slot's first knot buffer (the built-in tables have
-/// 91); a longer table replaces it with a bigger one.
-const SLOT_KNOTS: usize = 128;
+/// Writes `data` into `slot`'s buffer, replacing it with a bigger one when it is too small.
+fn write_growing<T: bytemuck::Pod>(
+    gpu: &GpuContext,
+    slot: &mut Option<Buffer>,
+    name: &str,
+    data: &[T],
+    min_elements: usize,
+    usage: BufferUsage,
+) -> Result<()> {
+    let bytes = std::mem::size_of_val(data) as u64;
+    if slot.as_ref().is_some_and(|b| b.size() < bytes) {
+        *slot = None;
+    }
+    match slot {
+        Some(buffer) => buffer.write(data)?,
+        None => {
+            let mut contents = data.to_vec();
+            contents.resize(data.len().max(min_elements), T::zeroed());
+            *slot = Some(upload(gpu, name, &contents, usage)?);
+        }
+    }
+    Ok(())
+}
 
 /// The lacquer raster renderer; keeps its pipelines, targets and buffers between draws.
 #[derive(Default)]
@@ -146,8 +207,7 @@ pub struct LacquerRenderer {
     sampler: Option<Sampler>,
     black_environment: Option<GpuEnvironment>,
     targets: TargetCache,
-    /// Slot 0 is the background pass; slot i + 1 is object i.
-    slots: Vec<ObjectSlot>,
+    buffers: DrawBuffers,
     timestamps: Option<TimestampPool>,
 }
 
@@ -171,33 +231,87 @@ impl LacquerRenderer {
     ) -> Result<()> {
         if let Entry::Vacant(entry) = self.pipelines.entry((kind, samples, layer_count)) {
             use crate::gpu::shaders::*;
-            let (name, vertex_spirv, fragment_spirv, attributes, depth_test): (_, _, _, &[_], _) =
-                match kind {
-                    PipelineKind::Mesh(MeshShading::Lacquer) => {
-                        ("lacquer", MESH_VERT, LACQUER_FRAG, &VERTEX_ATTRIBUTES, true)
-                    }
-                    PipelineKind::Mesh(MeshShading::Trivial) => {
-                        ("trivial", MESH_VERT, TRIVIAL_FRAG, &VERTEX_ATTRIBUTES, true)
-                    }
-                    PipelineKind::Background => {
-                        ("background", BACKGROUND_VERT, BACKGROUND_FRAG, &[], false)
-                    }
-                };
-            entry.insert(gpu.create_graphics_pipeline(&GraphicsPipelineDesc {
+            const GBUFFER_FORMATS: [Format; 2] = [Format::Rgba32Float, Format::Rgba32Float];
+            const COLOR_FORMAT: [Format; 1] = [Format::Rgba32Float];
+            // frame.glsl's ENV_LAYER_COUNT (constant_id 0): a sampler array may only be indexed
+            // by constants on lavapipe, and a constant K lets the shader skip the absent layers.
+            // shade_body.glsl's SAMPLE_COUNT is constant_id 1.
+            let constants = [layer_count, samples];
+            let mesh = |name, fragment_spirv, color_formats| GraphicsPipelineDesc {
                 name,
-                vertex_spirv,
+                vertex_spirv: MESH_VERT,
                 fragment_spirv,
-                bindings: &BINDINGS,
+                bindings: &GRAPHICS_BINDINGS,
                 vertex_stride: VERTEX_STRIDE,
-                vertex_attributes: attributes,
-                color_format: Format::Rgba32Float,
-                depth_format: Format::Depth32Float,
+                vertex_attributes: &VERTEX_ATTRIBUTES,
+                color_formats,
+                depth_format: Some(Format::Depth32Float),
                 samples,
-                depth_test,
-                // frame.glsl's ENV_LAYER_COUNT: a sampler array may only be indexed by constants
-                // on lavapipe, and a constant K lets the shader skip the absent layers.
-                fragment_constants: &[layer_count],
-            })?);
+                depth_test: Some(DepthTest {
+                    compare: DepthCompare::Less,
+                    write: true,
+                }),
+                fragment_constants: &constants[..1],
+            };
+            // background.vert's triangle lies at depth 1.
+            let full_screen =
+                |name, fragment_spirv, bindings, samples, depth_test| GraphicsPipelineDesc {
+                    name,
+                    vertex_spirv: BACKGROUND_VERT,
+                    fragment_spirv,
+                    bindings,
+                    vertex_stride: VERTEX_STRIDE,
+                    vertex_attributes: &[],
+                    color_formats: &COLOR_FORMAT,
+                    depth_format: Some(Format::Depth32Float),
+                    samples,
+                    depth_test,
+                    fragment_constants: &constants,
+                };
+            let multisampled = samples > 1;
+            let desc = match kind {
+                PipelineKind::GBuffer => mesh("gbuffer", GBUFFER_FRAG, &GBUFFER_FORMATS),
+                PipelineKind::Trivial => mesh("trivial", TRIVIAL_FRAG, &COLOR_FORMAT),
+                // Writes 0 (covered) or 1 (the clear value, passing as equal so the background
+                // colour is written too) into the coverage depth.
+                PipelineKind::Coverage => full_screen(
+                    "coverage",
+                    if multisampled {
+                        COVERAGE_MS_FRAG
+                    } else {
+                        COVERAGE_FRAG
+                    },
+                    &SHADE_BINDINGS[..],
+                    1,
+                    Some(DepthTest {
+                        compare: DepthCompare::LessOrEqual,
+                        write: true,
+                    }),
+                ),
+                // 1 > 0 passes where a sample is covered; early, so uncovered blocks are skipped.
+                PipelineKind::Shade => full_screen(
+                    "shade",
+                    if multisampled {
+                        SHADE_MS_FRAG
+                    } else {
+                        SHADE_FRAG
+                    },
+                    &SHADE_BINDINGS[..],
+                    1,
+                    Some(DepthTest {
+                        compare: DepthCompare::Greater,
+                        write: false,
+                    }),
+                ),
+                PipelineKind::Background => full_screen(
+                    "background",
+                    BACKGROUND_FRAG,
+                    &GRAPHICS_BINDINGS[..],
+                    samples,
+                    None,
+                ),
+            };
+            entry.insert(gpu.create_graphics_pipeline(&desc)?);
         }
         Ok(())
     }
@@ -275,6 +389,7 @@ impl LacquerRenderer {
         options: DrawOptions,
     ) -> Result<(HdrImage, Option<DrawTimings>)> {
         let samples = settings.samples;
+        let deferred = options.shading == MeshShading::Lacquer;
         let with_background = scene.background == Background::Environment;
         self.prepare_shared(gpu, scene.environment.is_none())?;
         let internal = || Error::invalid("renderer", "uninitialised", "internal error");
@@ -287,50 +402,82 @@ impl LacquerRenderer {
                 .layers
                 .len(),
         } as u32;
-        let mesh_kind = PipelineKind::Mesh(options.shading);
+        let mesh_kind = match options.shading {
+            MeshShading::Lacquer => PipelineKind::GBuffer,
+            MeshShading::Trivial => PipelineKind::Trivial,
+        };
         self.ensure_pipeline(gpu, mesh_kind, samples, layer_count)?;
-        if with_background {
+        if deferred {
+            self.ensure_pipeline(gpu, PipelineKind::Coverage, samples, layer_count)?;
+            self.ensure_pipeline(gpu, PipelineKind::Shade, samples, layer_count)?;
+        }
+        let forward_background = !deferred && with_background;
+        if forward_background {
             self.ensure_pipeline(gpu, PipelineKind::Background, samples, layer_count)?;
         }
         if options.timed && self.timestamps.is_none() {
             self.timestamps = Some(gpu.create_timestamp_pool(TIMESTAMPS)?);
         }
-        let mut background_frame = self.write_slots(gpu, scene, settings)?;
+        let mut scene_frame = self.write_buffers(gpu, scene, settings)?;
         let environment = match scene.environment {
             Some(env) => env,
             None => self.black_environment.as_ref().ok_or_else(internal)?,
         };
         let sampler = self.sampler.as_ref().ok_or_else(internal)?;
+        let buffers = &self.buffers;
+        let scene_frame_buffer = buffers.scene_frame.as_ref().ok_or_else(internal)?;
         let pipeline = |kind| {
             self.pipelines
                 .get(&(kind, samples, layer_count))
                 .ok_or_else(internal)
         };
         let mesh_pipeline = pipeline(mesh_kind)?;
-        // Descriptor sets name the environment's images, which may differ from the last draw's;
-        // they are cheap (one small pool each), so they are made per draw.
-        let bind = |pipeline: &GraphicsPipeline, slot: &ObjectSlot| {
-            bind_set(gpu, pipeline, slot, environment, sampler)
+        // Descriptor sets name the environment's images (and the shading pass the targets),
+        // which may differ from the last draw's; they are cheap (one small pool each), so they
+        // are made per draw.
+        let graphics_set = |pipeline: &GraphicsPipeline, frame: &Buffer| {
+            graphics_descriptor_set(gpu, pipeline, frame, environment, sampler)
         };
-        let background = match with_background {
+        let background = match forward_background {
             true => {
                 let p = pipeline(PipelineKind::Background)?;
-                Some((p, bind(p, &self.slots[0])?))
+                Some((p, graphics_set(p, scene_frame_buffer)?))
             }
             false => None,
         };
-        let object_sets: Vec<DescriptorSet> = self.slots[1..=meshes.len()]
+        let object_sets: Vec<DescriptorSet> = buffers.object_frames[..meshes.len()]
             .iter()
-            .map(|slot| bind(mesh_pipeline, slot))
+            .map(|frame| graphics_set(mesh_pipeline, frame))
             .collect::<Result<_>>()?;
         let stamps = if options.timed {
             self.timestamps.as_ref()
         } else {
             None
         };
+        let kind = match deferred {
+            true => TargetKind::Deferred,
+            false => TargetKind::Forward,
+        };
         let targets = self
             .targets
-            .get(gpu, (settings.width, settings.height, samples))?;
+            .get(gpu, (settings.width, settings.height, samples, kind))?;
+        let shade = match &targets.attachments {
+            Attachments::Deferred {
+                position, normal, ..
+            } => {
+                let shade_pipeline = pipeline(PipelineKind::Shade)?;
+                let set = shade_descriptor_set(
+                    gpu,
+                    shade_pipeline,
+                    buffers,
+                    environment,
+                    sampler,
+                    (position, normal),
+                )?;
+                Some((pipeline(PipelineKind::Coverage)?, shade_pipeline, set))
+            }
+            Attachments::Forward { .. } => None,
+        };
         let objects: Vec<(&GpuMesh, &DescriptorSet)> =
             meshes.iter().copied().zip(&object_sets).collect();
         let clear_color = match scene.background {
@@ -341,14 +488,30 @@ impl LacquerRenderer {
         let mut first_row = 0;
         while first_row < settings.height {
             let rows = targets.strip_rows.min(settings.height - first_row);
-            if with_background {
-                // The previous strip's submit has finished (submit_and_wait), so slot 0's
+            if deferred || forward_background {
+                // The previous strip's submit has finished (submit_and_wait), so the scene
                 // uniforms can be rewritten for this one.
-                background_frame.strip_offset[1] = first_row as f32;
-                self.slots[0]
-                    .frame
-                    .write(std::slice::from_ref(&background_frame))?;
+                scene_frame.strip_offset[1] = first_row as f32;
+                match self.buffers.scene_frame.as_mut() {
+                    Some(buffer) => buffer.write(std::slice::from_ref(&scene_frame))?,
+                    None => return Err(internal()),
+                }
             }
+            let passes = match &shade {
+                Some((coverage_pipeline, shade_pipeline, shade_set)) => Passes::Deferred {
+                    gbuffer_pipeline: mesh_pipeline,
+                    objects: objects.clone(),
+                    coverage_pipeline,
+                    shade_pipeline,
+                    shade_set,
+                },
+                None => Passes::Forward {
+                    background: background.as_ref().map(|(p, s)| (*p, s)),
+                    mesh_pipeline,
+                    objects: objects.clone(),
+                    clear_color,
+                },
+            };
             let recorded = RecordedDraw {
                 targets,
                 strip: Strip {
@@ -357,10 +520,7 @@ impl LacquerRenderer {
                     image_width: settings.width,
                     image_height: settings.height,
                 },
-                background: background.as_ref().map(|(p, s)| (*p, s)),
-                mesh_pipeline,
-                objects: objects.clone(),
-                clear_color,
+                passes,
                 stamps,
             };
             record_and_submit(gpu, &recorded)?;
@@ -382,14 +542,15 @@ impl LacquerRenderer {
         Ok((image, timings))
     }
 
-    /// Writes the frame uniforms and knots of the background (slot 0) and of every object.
-    fn write_slots(
+    /// Writes the frame uniforms (shared and per object), the materials and the Fresnel knots;
+    /// returns the shared frame uniforms (the caller sets each strip's offset).
+    fn write_buffers(
         &mut self,
         gpu: &GpuContext,
         scene: &DrawScene<'_>,
         settings: &RenderSettings,
     ) -> Result<FrameUniforms> {
-        let environment_betas = match scene.environment {
+        let layer_betas = match scene.environment {
             Some(env) => env.betas.clone(),
             None => self
                 .black_environment
@@ -402,91 +563,135 @@ impl LacquerRenderer {
             .iter()
             .map(|o| o.mesh.bounding_radius())
             .fold(0.0, f64::max);
-        let uniforms = |brdf: &BrdfParams, fresnel: &FresnelTable, view_blur: ViewBlur| {
-            FrameUniforms::new(
-                scene.camera,
-                settings.width,
-                settings.height,
-                scene_radius,
-                scene.lights,
-                brdf,
-                fresnel,
-                &EnvironmentUniforms {
-                    enabled: scene.environment.is_some(),
-                    layer_betas: environment_betas.clone(),
-                    view_blur,
-                },
-            )
-        };
-        // The background pass needs only the camera and the environment: the uniforms of any
-        // material will do (a default one when the scene has no object).
-        let default_brdf;
-        let default_fresnel;
-        let (brdf, fresnel) = match scene.objects.first() {
-            Some(o) => (o.brdf, o.fresnel),
-            None => {
-                default_brdf = crate::model::LacquerMaterial::default().brdf_params()?;
-                default_fresnel = FresnelTable::new(vec![0.0, 90.0], vec![[0.0; 3], [1.0; 3]])?;
-                (&default_brdf, &default_fresnel)
-            }
-        };
-        let mut contents = vec![(uniforms(brdf, fresnel, ViewBlur::default()), fresnel)];
-        for object in scene.objects {
-            contents.push((
-                uniforms(object.brdf, object.fresnel, object.view_blur),
+        let mut frame = FrameUniforms::new(
+            scene.camera,
+            settings.width,
+            settings.height,
+            scene_radius,
+            scene.lights,
+            &EnvironmentUniforms {
+                enabled: scene.environment.is_some(),
+                layer_betas,
+            },
+        );
+        let buffers = &mut self.buffers;
+        let mut knots: Vec<[f32; 4]> = Vec::new();
+        let mut materials: Vec<[f32; 4]> = Vec::new();
+        for (i, object) in scene.objects.iter().enumerate() {
+            let first_knot = knots.len();
+            knots.extend(shading::fresnel_knots(object.fresnel));
+            materials.extend(shading::object_material_vec4s(
+                object.brdf,
                 object.fresnel,
+                first_knot,
+                &object.view_blur,
             ));
-        }
-        for (i, (frame, fresnel)) in contents.iter().enumerate() {
-            let knots = shading::fresnel_knots(fresnel);
-            let fits = |slot: &ObjectSlot| slot.knots.size() as usize >= knots.len() * 16;
-            if self.slots.get(i).is_some_and(|slot| !fits(slot)) {
-                self.slots.truncate(i);
+            frame.draw_info = [i as i32 + 1, 0, 0, 0];
+            if buffers.object_frames.len() <= i {
+                let buffer = upload(
+                    gpu,
+                    "object frame uniforms",
+                    std::slice::from_ref(&frame),
+                    BufferUsage::UNIFORM,
+                )?;
+                buffers.object_frames.push(buffer);
+            } else {
+                buffers.object_frames[i].write(std::slice::from_ref(&frame))?;
             }
-            if self.slots.len() <= i {
-                let capacity = vec![[0.0f32; 4]; knots.len().max(SLOT_KNOTS)];
-                self.slots.insert(
-                    i,
-                    ObjectSlot {
-                        frame: upload(
-                            gpu,
-                            "frame uniforms",
-                            std::slice::from_ref(frame),
-                            BufferUsage::UNIFORM,
-                        )?,
-                        knots: upload(gpu, "fresnel knots", &capacity, BufferUsage::STORAGE)?,
-                    },
-                );
-            }
-            let slot = &mut self.slots[i];
-            slot.frame.write(std::slice::from_ref(frame))?;
-            slot.knots.write(&knots)?;
         }
-        Ok(contents[0].0)
+        frame.draw_info = match scene.background {
+            Background::Environment => [0, FrameUniforms::BACKGROUND_ENVIRONMENT, 0, 0],
+            _ => [0, FrameUniforms::BACKGROUND_CONSTANT, 0, 0],
+        };
+        frame.background_color = match scene.background {
+            Background::Color([r, g, b]) => [r, g, b, 1.0],
+            Background::Transparent | Background::Environment => [0.0; 4],
+        };
+        write_growing(
+            gpu,
+            &mut buffers.scene_frame,
+            "scene frame uniforms",
+            std::slice::from_ref(&frame),
+            1,
+            BufferUsage::UNIFORM,
+        )?;
+        write_growing(
+            gpu,
+            &mut buffers.knots,
+            "fresnel knots",
+            &knots,
+            INITIAL_KNOTS,
+            BufferUsage::STORAGE,
+        )?;
+        write_growing(
+            gpu,
+            &mut buffers.materials,
+            "object materials",
+            &materials,
+            4 * INITIAL_OBJECTS,
+            BufferUsage::STORAGE,
+        )?;
+        Ok(frame)
     }
 }
 
-fn bind_set(
-    gpu: &GpuContext,
-    pipeline: &GraphicsPipeline,
-    slot: &ObjectSlot,
-    environment: &GpuEnvironment,
-    sampler: &Sampler,
-) -> Result<DescriptorSet> {
-    // Unused array slots repeat the last layer: every element needs a valid descriptor.
+/// The environment layers as the sampler array binding wants them: unused array slots repeat the
+/// last layer, since every element needs a valid descriptor.
+fn layer_images(environment: &GpuEnvironment) -> Vec<&Image> {
     let mut layer_images: Vec<&Image> = environment.layers.iter().collect();
     while layer_images.len() < MAX_ENV_LAYERS {
         let last = layer_images[layer_images.len() - 1];
         layer_images.push(last);
     }
     layer_images.truncate(MAX_ENV_LAYERS);
+    layer_images
+}
+
+fn graphics_descriptor_set(
+    gpu: &GpuContext,
+    pipeline: &GraphicsPipeline,
+    frame: &Buffer,
+    environment: &GpuEnvironment,
+    sampler: &Sampler,
+) -> Result<DescriptorSet> {
     Ok(gpu.create_descriptor_set(
         pipeline.layout(),
         &[
-            (0, Resource::Buffer(&slot.frame)),
-            (1, Resource::Buffer(&slot.knots)),
-            (2, Resource::SampledImages(layer_images, sampler)),
+            (0, Resource::Buffer(frame)),
+            (
+                2,
+                Resource::SampledImages(layer_images(environment), sampler),
+            ),
             (3, Resource::SampledImage(&environment.irradiance, sampler)),
+        ],
+    )?)
+}
+
+fn shade_descriptor_set(
+    gpu: &GpuContext,
+    pipeline: &GraphicsPipeline,
+    buffers: &DrawBuffers,
+    environment: &GpuEnvironment,
+    sampler: &Sampler,
+    (position, normal): (&Image, &Image),
+) -> Result<DescriptorSet> {
+    let internal = || Error::invalid("renderer", "buffers unwritten", "internal error");
+    let frame = buffers.scene_frame.as_ref().ok_or_else(internal)?;
+    let knots = buffers.knots.as_ref().ok_or_else(internal)?;
+    let materials = buffers.materials.as_ref().ok_or_else(internal)?;
+    Ok(gpu.create_descriptor_set(
+        pipeline.layout(),
+        &[
+            (0, Resource::Buffer(frame)),
+            (1, Resource::Buffer(knots)),
+            (
+                2,
+                Resource::SampledImages(layer_images(environment), sampler),
+            ),
+            (3, Resource::SampledImage(&environment.irradiance, sampler)),
+            (4, Resource::Buffer(materials)),
+            (5, Resource::SampledImage(position, sampler)),
+            (6, Resource::SampledImage(normal, sampler)),
         ],
     )?)
 }

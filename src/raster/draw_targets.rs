@@ -1,12 +1,16 @@
-//! The render targets of one image size and sample count — colour (MSAA), resolve, depth and the
-//! host-visible readback buffer — kept between renders so a batch of same-sized images allocates
-//! them once (at 1024² with 4× MSAA they are ~110 MB; allocating and freeing them per image cost
-//! more than the copy-out).
+//! The render targets of one image size, sample count and kind of draw, with the host-visible
+//! readback buffer, kept between renders so a batch of same-sized images allocates them once.
+//!
+//! - The lacquer draw is deferred: a G-buffer (position + object, normal; RGBA32F, multisampled)
+//!   and depth, and the single-sampled image the shading pass writes, copied to the readback
+//!   buffer.
+//! - The forward draw (the benchmark's trivial shader) has a colour target, its MSAA resolve and
+//!   depth, copied to the readback buffer.
 //!
 //! Tall images are drawn in horizontal strips (one submit each) into targets of
-//! [`MAX_COLOR_TARGET_BYTES`] at most, each strip copied to its rows of the full-size readback
-//! buffer: the 4× MSAA RGBA32F colour target of a 1024² image alone would be 64 MiB, most of the
-//! render's peak memory. Images up to 512² with 4× MSAA fit one strip and are drawn in one pass.
+//! [`MAX_COLOR_TARGET_BYTES`] at most per colour attachment, each strip landing in its rows of the
+//! full-size readback buffer: a 4× MSAA RGBA32F attachment of a 1024² image alone would be 64 MiB,
+//! most of the render's peak memory. Images up to 512² with 4× MSAA fit one strip.
 //!
 //! Reuse across submits is safe because every render starts with barriers whose first scope is
 //! the previous render's last use of each target (pipeline barriers order against all earlier
@@ -15,27 +19,53 @@
 use crate::gpu::{Buffer, BufferDesc, GpuContext, Image, ImageDesc};
 use crate::Result;
 
-/// Width, height, samples.
-pub(crate) type TargetKey = (u32, u32, u32);
+/// How a draw renders: which attachments its targets have.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum TargetKind {
+    /// G-buffer for the compute shading pass (the lacquer draw).
+    Deferred,
+    /// Colour + resolve (the trivial-shader draw of the benchmark).
+    Forward,
+}
 
-/// Largest multisampled colour target (bytes); the depth target is a quarter of it.
+/// Width, height, samples, kind.
+pub(crate) type TargetKey = (u32, u32, u32, TargetKind);
+
+/// Largest multisampled colour attachment (bytes); the depth target is a quarter of it.
 pub const MAX_COLOR_TARGET_BYTES: u64 = 16 << 20;
 
-/// Rows per strip for an image `width` wide with `samples` per pixel (RGBA32F samples), the
-/// colour target holding at most `budget` bytes.
+/// Rows per strip for an image `width` wide with `samples` per pixel (RGBA32F samples), each
+/// colour attachment holding at most `budget` bytes.
 pub fn strip_rows(width: u32, height: u32, samples: u32, budget: u64) -> u32 {
     let row_bytes = u64::from(width) * u64::from(samples) * 16;
     let rows = (budget / row_bytes.max(1)).max(1);
     rows.min(u64::from(height)) as u32
 }
 
+/// The colour attachments of one kind of draw.
+pub(crate) enum Attachments {
+    Deferred {
+        /// xyz: interpolated position; w: object index + 1 (0 where no mesh covers the sample).
+        position: Image,
+        /// xyz: interpolated normal.
+        normal: Image,
+        /// The shaded, sample-averaged strip (single-sampled).
+        output: Image,
+        /// Single-sampled depth of the shading pass: 0 where a G-buffer sample is covered.
+        coverage: Image,
+    },
+    Forward {
+        color: Image,
+        /// The single-sampled image the MSAA colour resolves into (None without MSAA).
+        resolve: Option<Image>,
+    },
+}
+
 pub(crate) struct DrawTargets {
     pub key: TargetKey,
     /// Rows of the image each target holds (the last strip may use fewer).
     pub strip_rows: u32,
-    pub color: Image,
-    /// The single-sampled image the MSAA colour resolves into (None without MSAA).
-    pub resolve: Option<Image>,
+    pub attachments: Attachments,
     pub depth: Image,
     pub readback: Buffer,
     /// Whether a render used these targets before (then the first barriers wait for that use).
@@ -43,46 +73,64 @@ pub(crate) struct DrawTargets {
 }
 
 impl DrawTargets {
-    pub fn new(gpu: &GpuContext, (width, height, samples): TargetKey, budget: u64) -> Result<Self> {
+    pub fn new(gpu: &GpuContext, key: TargetKey, budget: u64) -> Result<Self> {
+        let (width, height, samples, kind) = key;
         let rows = strip_rows(width, height, samples, budget);
-        let color = gpu.create_image(ImageDesc::color_target("color", width, rows, samples))?;
-        let resolve = if samples > 1 {
-            Some(gpu.create_image(ImageDesc::color_target("resolve", width, rows, 1))?)
-        } else {
-            None
+        let attachments = match kind {
+            TargetKind::Deferred => Attachments::Deferred {
+                position: gpu.create_image(ImageDesc::sampled_target(
+                    "g-buffer position",
+                    width,
+                    rows,
+                    samples,
+                ))?,
+                normal: gpu.create_image(ImageDesc::sampled_target(
+                    "g-buffer normal",
+                    width,
+                    rows,
+                    samples,
+                ))?,
+                output: gpu.create_image(ImageDesc::color_target("shaded", width, rows, 1))?,
+                coverage: gpu.create_image(ImageDesc::depth_target("coverage", width, rows, 1))?,
+            },
+            TargetKind::Forward => Attachments::Forward {
+                color: gpu.create_image(ImageDesc::color_target("color", width, rows, samples))?,
+                resolve: if samples > 1 {
+                    Some(gpu.create_image(ImageDesc::color_target("resolve", width, rows, 1))?)
+                } else {
+                    None
+                },
+            },
         };
         let depth = gpu.create_image(ImageDesc::depth_target("depth", width, rows, samples))?;
         let image_bytes = u64::from(width) * u64::from(height) * 16;
         let readback = gpu.create_buffer(BufferDesc::readback("readback", image_bytes))?;
         Ok(DrawTargets {
-            key: (width, height, samples),
+            key,
             strip_rows: rows,
-            color,
-            resolve,
+            attachments,
             depth,
             readback,
             used: false,
         })
     }
-
-    /// The single-sampled image copied to the readback buffer.
-    pub fn output(&self) -> &Image {
-        self.resolve.as_ref().unwrap_or(&self.color)
-    }
 }
 
-/// Holds the targets of the last size used: a new size replaces them (batches render one size;
-/// keeping several 100 MB sets would only raise peak memory).
+/// Holds the targets of the last size used for each kind of draw: a new size replaces them
+/// (batches render one size; keeping several 100 MB sets would only raise peak memory). Real
+/// renders are all deferred, so they hold one set; the benchmark alternates both kinds.
 pub(crate) struct TargetCache {
-    current: Option<DrawTargets>,
-    /// Colour target budget in bytes ([`MAX_COLOR_TARGET_BYTES`]; smaller in tests).
+    deferred: Option<DrawTargets>,
+    forward: Option<DrawTargets>,
+    /// Colour attachment budget in bytes ([`MAX_COLOR_TARGET_BYTES`]; smaller in tests).
     pub color_budget: u64,
 }
 
 impl Default for TargetCache {
     fn default() -> Self {
         TargetCache {
-            current: None,
+            deferred: None,
+            forward: None,
             color_budget: MAX_COLOR_TARGET_BYTES,
         }
     }
@@ -90,12 +138,16 @@ impl Default for TargetCache {
 
 impl TargetCache {
     pub fn get(&mut self, gpu: &GpuContext, key: TargetKey) -> Result<&mut DrawTargets> {
-        if self.current.as_ref().map(|t| t.key) != Some(key) {
+        let current = match key.3 {
+            TargetKind::Deferred => &mut self.deferred,
+            TargetKind::Forward => &mut self.forward,
+        };
+        if current.as_ref().map(|t| t.key) != Some(key) {
             // Free the old set before allocating the new one: peak memory is one set.
-            self.current = None;
-            self.current = Some(DrawTargets::new(gpu, key, self.color_budget)?);
+            *current = None;
+            *current = Some(DrawTargets::new(gpu, key, self.color_budget)?);
         }
-        match self.current.as_mut() {
+        match current.as_mut() {
             Some(targets) => Ok(targets),
             None => Err(crate::Error::invalid(
                 "render targets",

@@ -1,0 +1,61 @@
+// Radiance leaving a lacquer surface point towards the camera: Σ over lights of f_r · E · (N·L)
+// (SPEC §2, §4) plus the environment term
+// L_env = F(acos nv)·Lpre(R, β(nv)) + k_d·max(a + b·nv, 0)·g(r)·E_irr(N)/π (SPEC §4).
+//
+// The includer includes frame.glsl and lacquer_brdf.glsl first.
+
+#ifndef LACQUER_SHADE_GLSL
+#define LACQUER_SHADE_GLSL
+
+// view_blur: (β_normal, β_grazing, p) of SPEC §4's β(nv), per material.
+vec3 environment_light(LacquerParams p, vec3 view_blur, vec3 n, vec3 v) {
+    vec2 nv2 = dot_compensated(n, v);
+    float nv = nv2.x + nv2.y;
+    if (nv <= 0.0) {
+        return vec3(0.0);
+    }
+    vec3 r = 2.0 * nv * n - v;
+    float beta = view_blur.y + (view_blur.x - view_blur.y) * pow(min(nv, 1.0), view_blur.z);
+    vec3 specular = fresnel_table(angle_deg_of_cos(nv), p.fresnel_first, p.fresnel_count)
+        * prefiltered_radiance(r, beta);
+    vec3 irradiance = textureLod(env_irradiance, n, 0.0).rgb;
+    return specular + view_dependent_diffuse(p, nv2) * irradiance;
+}
+
+// `position` and `interpolated_normal` as the rasteriser interpolated them at a pixel centre.
+vec3 lacquer_radiance(LacquerParams p, vec3 view_blur, vec3 position, vec3 interpolated_normal) {
+    vec3 n = normalize(interpolated_normal);
+    vec3 v = normalize(frame.eye.xyz - position);
+    // Light-independent parts of f_r, once per point (see lacquer_brdf_view).
+    vec2 nv2 = dot_compensated(n, v);
+    vec3 f_diff = view_dependent_diffuse(p, nv2);
+    vec3 radiance = vec3(0.0);
+    for (int i = 0; i < frame.light_count.x; ++i) {
+        vec4 lv = frame.light_vector[i];
+        vec3 l;
+        vec3 irradiance;
+        if (lv.w == 0.0) {
+            l = normalize(lv.xyz);
+            irradiance = frame.light_color[i].rgb;
+        } else {
+            vec3 to_light = lv.xyz - position;
+            float d2 = dot(to_light, to_light);
+            if (d2 <= 0.0) {
+                continue;
+            }
+            l = to_light * inversesqrt(d2);
+            irradiance = frame.light_color[i].rgb / d2;
+        }
+        float nl = dot(n, l);
+        if (nl <= 0.0) {
+            continue;
+        }
+        radiance += lacquer_brdf_view(p, n, v, l, nv2, f_diff) * irradiance * nl;
+    }
+    if (frame.environment.x != 0) {
+        radiance += environment_light(p, view_blur, n, v);
+    }
+    return radiance;
+}
+
+#endif

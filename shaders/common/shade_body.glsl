@@ -1,0 +1,108 @@
+// The lacquer draw's shading pass (shade.frag, shade_ms.frag), a full-screen triangle over a
+// single-sampled target: each pixel reads the G-buffer samples gbuffer.frag wrote, shades each
+// distinct surface once (lacquer_shade.glsl), gives uncovered samples the background and writes
+// the average of its samples: what forward shading followed by an MSAA resolve gives.
+//
+// Why a separate pass: llvmpipe shades a triangle in whole 4×4 blocks, so on a mesh of ~6-pixel
+// triangles a forward lacquer shader ran on every block each triangle touched (and on hidden
+// surfaces); here each pixel is shaded once per visible surface (BENCHMARKS.md). Pixels no mesh
+// covers already hold the background and fail the early depth test (coverage_body.glsl), which is
+// the one way llvmpipe skips a block of pixels: it runs both sides of a branch under a lane mask.
+//
+// The includer defines MULTISAMPLED (sampler2DMS G-buffer) or not (sampler2D).
+
+#include "frame.glsl"
+#define FRESNEL_SET 0
+#define FRESNEL_BINDING 1
+#include "lacquer_brdf.glsl"
+#include "lacquer_shade.glsl"
+
+// Per object, four vec4s: (m, a, b, g(r)), (k_d, knot count), (a_lo, b_lo, first knot, 0),
+// (β_normal, β_grazing, p, 0). Packed by shading::ObjectMaterial.
+layout(std430, set = 0, binding = 4) readonly buffer Materials {
+    vec4 object_material[];
+};
+
+const int MAX_SAMPLES = 4;
+#ifdef MULTISAMPLED
+layout(set = 0, binding = 5) uniform sampler2DMS gbuffer_position;
+layout(set = 0, binding = 6) uniform sampler2DMS gbuffer_normal;
+layout(constant_id = 1) const int SAMPLE_COUNT = MAX_SAMPLES;
+#define FETCH(image, texel, s) texelFetch(image, texel, s)
+#else
+layout(set = 0, binding = 5) uniform sampler2D gbuffer_position;
+layout(set = 0, binding = 6) uniform sampler2D gbuffer_normal;
+const int SAMPLE_COUNT = 1;
+#define FETCH(image, texel, s) texelFetch(image, texel, 0)
+#endif
+
+layout(location = 0) out vec4 out_radiance; // linear radiance, alpha = coverage
+
+vec3 shade_object(int object, vec3 position, vec3 interpolated_normal) {
+    vec4 material = object_material[4 * object + 0];
+    vec4 albedo_count = object_material[4 * object + 1];
+    vec4 material_lo = object_material[4 * object + 2];
+    vec4 view_blur = object_material[4 * object + 3];
+    LacquerParams p;
+    p.beckmann_m = material.x;
+    p.diffuse_a = material.y;
+    p.diffuse_b = material.z;
+    p.diffuse_a_lo = material_lo.x;
+    p.diffuse_b_lo = material_lo.y;
+    p.lacquer_g = material.w;
+    p.albedo = albedo_count.xyz;
+    p.fresnel_first = int(material_lo.z);
+    p.fresnel_count = int(albedo_count.w);
+    return lacquer_radiance(p, view_blur.xyz, position, interpolated_normal);
+}
+
+void main() {
+    ivec2 texel = ivec2(gl_FragCoord.xy);
+    vec4 position[MAX_SAMPLES];
+    vec4 normal[MAX_SAMPLES];
+    uint covered = 0u;
+    for (int s = 0; s < SAMPLE_COUNT; ++s) {
+        position[s] = FETCH(gbuffer_position, texel, s);
+        normal[s] = FETCH(gbuffer_normal, texel, s);
+        if (position[s].w != 0.0) {
+            covered |= 1u << s;
+        }
+    }
+    vec4 sum = vec4(0.0);
+    int uncovered = SAMPLE_COUNT - bitCount(covered);
+    if (uncovered > 0) {
+        // The pixel centre in whole-image coordinates, as in background.frag.
+        vec2 pixel = vec2(gl_FragCoord.x, gl_FragCoord.y + frame.strip_offset.y);
+        sum += background_radiance(pixel) * float(uncovered);
+    }
+    // Samples of one triangle hold bit-identical values (interpolated at the pixel centre), so
+    // each distinct (position, normal, object) is shaded once and weighted by its sample count.
+    // A loop, not a branch per sample: llvmpipe repeats a loop only while some lane needs it, but
+    // runs both sides of every branch.
+    // coverage_body.glsl's depth test lets through only pixels with a covered sample; were one to
+    // have none, the loop body below adds nothing (weight 0) and reads a valid object.
+    uint todo = covered;
+    do {
+        int first = max(findLSB(todo), 0);
+        vec4 p = position[0];
+        vec4 n = normal[0];
+        for (int s = 1; s < SAMPLE_COUNT; ++s) {
+            if (s == first) {
+                p = position[s];
+                n = normal[s];
+            }
+        }
+        uint same = 0u;
+        for (int s = 0; s < SAMPLE_COUNT; ++s) {
+            if (position[s] == p && normal[s] == n) {
+                same |= 1u << s;
+            }
+        }
+        // `first` always: a NaN (never written by gbuffer.frag) must not stall the loop.
+        same = (same & todo) | (todo != 0u ? 1u << first : 0u);
+        vec3 radiance = shade_object(max(int(p.w) - 1, 0), p.xyz, n.xyz);
+        sum += vec4(radiance, 1.0) * float(bitCount(same));
+        todo &= ~same;
+    } while (todo != 0u);
+    out_radiance = sum / float(SAMPLE_COUNT);
+}
