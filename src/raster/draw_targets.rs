@@ -43,6 +43,8 @@ pub fn strip_rows(width: u32, height: u32, samples: u32, budget: u64) -> u32 {
 }
 
 /// The colour attachments of one kind of draw.
+// One value per renderer and kind: boxing the larger variant would save nothing.
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum Attachments {
     Deferred {
         /// xyz: interpolated position; w: object index + 1 (0 where no mesh covers the sample).
