@@ -80,13 +80,15 @@ pub struct FrameUniforms {
     pub light_color: [[f32; 4]; MAX_LIGHTS],
     pub environment: [i32; 4],
     pub layer_beta: [[f32; 4]; MAX_ENV_LAYERS / 4],
+    /// ln β_k for k ≥ 1 (0 where β_k ≤ 0): the shader interpolates layers linearly in ln β.
+    pub layer_log_beta: [[f32; 4]; MAX_ENV_LAYERS / 4],
     pub camera_right: [f32; 4],
     pub camera_up: [f32; 4],
     pub camera_back: [f32; 4],
     pub camera_params: [f32; 4],
     /// (0, first image row of the render target, 0, 0): the draw renders tall images in strips.
     pub strip_offset: [f32; 4],
-    /// (object index + 1 in the G-buffer pass, background kind, 0, 0): see [`FrameUniforms::BACKGROUND_ENVIRONMENT`].
+    /// (object index + 1 in the G-buffer pass, 0, 0, 0).
     pub draw_info: [i32; 4],
     /// The constant background (linear rgba; transparent is all 0).
     pub background_color: [f32; 4],
@@ -107,11 +109,6 @@ fn vec4(v: glam::DVec3, w: f32) -> [f32; 4] {
 }
 
 impl FrameUniforms {
-    /// `draw_info.y`: uncovered samples show `background_color`.
-    pub const BACKGROUND_CONSTANT: i32 = 0;
-    /// `draw_info.y`: uncovered samples show the sharp environment along the pixel's ray.
-    pub const BACKGROUND_ENVIRONMENT: i32 = 1;
-
     /// Packs one draw's camera, lights and environment. `lights.len()` must be ≤ MAX_LIGHTS
     /// (checked by the renderer before this is called; extra lights are ignored here).
     pub fn new(
@@ -124,13 +121,17 @@ impl FrameUniforms {
     ) -> Self {
         let (right, up, forward) = camera.basis();
         let mut layer_beta = [[0.0f32; 4]; MAX_ENV_LAYERS / 4];
-        for (k, beta) in environment
+        let mut layer_log_beta = [[0.0f32; 4]; MAX_ENV_LAYERS / 4];
+        for (k, &beta) in environment
             .layer_betas
             .iter()
             .take(MAX_ENV_LAYERS)
             .enumerate()
         {
-            layer_beta[k / 4][k % 4] = *beta as f32;
+            layer_beta[k / 4][k % 4] = beta as f32;
+            // Of the f32 β the shader compares against, so both describe the same layer.
+            let beta = f64::from(beta as f32);
+            layer_log_beta[k / 4][k % 4] = if beta > 0.0 { beta.ln() as f32 } else { 0.0 };
         }
         let mut frame = FrameUniforms {
             view_projection: camera
@@ -152,6 +153,7 @@ impl FrameUniforms {
                 0,
             ],
             layer_beta,
+            layer_log_beta,
             camera_right: vec4(right, 0.0),
             camera_up: vec4(up, 0.0),
             camera_back: vec4(-forward, 0.0),

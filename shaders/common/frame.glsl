@@ -18,20 +18,30 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 light_color[MAX_LIGHTS];  // rgb: irradiance E (directional) or intensity I (point)
     ivec4 environment;     // x: 1 if an environment lights the scene, y: number of layers K
     vec4 layer_beta[MAX_ENV_LAYERS / 4]; // β_k, four per vec4
+    vec4 layer_log_beta[MAX_ENV_LAYERS / 4]; // ln β_k (k ≥ 1), computed on the host
     vec4 camera_right;     // camera basis (world), for background rays
     vec4 camera_up;
     vec4 camera_back;      // −view direction
     vec4 camera_params;    // tan(fov/2), aspect W/H, width, height
     vec4 strip_offset;     // y: image row of the target's row 0 (tall images render in strips)
-    ivec4 draw_info;       // x: object index + 1 (G-buffer pass); y: background, 0 constant, 1 environment
+    ivec4 draw_info;       // x: object index + 1 (G-buffer pass)
     vec4 background_color; // the constant background (rgba; transparent is 0)
 } frame;
 
 layout(set = 0, binding = 2) uniform samplerCube env_layers[MAX_ENV_LAYERS];
 layout(set = 0, binding = 3) uniform samplerCube env_irradiance;
 
+// What pixels no mesh covers show, set per pipeline (raster/draw.rs): 0, frame.background_color;
+// 1, the sharp environment along the pixel's ray. A constant, so the cube lookup is not run (under
+// a lane mask, as llvmpipe runs both sides of a branch) when the background is a colour.
+layout(constant_id = 2) const int BACKGROUND_KIND = 0;
+
 float layer_beta(int k) {
     return frame.layer_beta[k / 4][k % 4];
+}
+
+float layer_log_beta(int k) {
+    return frame.layer_log_beta[k / 4][k % 4];
 }
 
 // Lpre(dir, β) of SPEC §4 from the layers: linear in β between layers 0 and 1, linear in log β
@@ -55,14 +65,18 @@ vec3 prefiltered_radiance(vec3 dir, float beta) {
             t = beta / beta1;
         } else {
             k0 = count - 1;
+            float log_lo = 0.0;
+            float log_hi = 1.0;
             for (int k = 1; k < count - 1; ++k) {
-                float lo = layer_beta(k);
-                float hi = layer_beta(k + 1);
-                if (beta < hi) {
+                if (beta < layer_beta(k + 1)) {
                     k0 = k;
-                    t = (log(beta) - log(lo)) / (log(hi) - log(lo));
+                    log_lo = layer_log_beta(k);
+                    log_hi = layer_log_beta(k + 1);
                     break;
                 }
+            }
+            if (k0 < count - 1) {
+                t = (log(beta) - log_lo) / (log_hi - log_lo);
             }
         }
     }
@@ -98,10 +112,9 @@ vec3 camera_ray(vec2 pixel) {
     return normalize(x * frame.camera_right.xyz + y * frame.camera_up.xyz - frame.camera_back.xyz);
 }
 
-// What pixels no mesh covers show (SPEC §1 camera ray for the environment): frame.draw_info.y and
-// frame.background_color.
+// What pixels no mesh covers show (SPEC §1 camera ray for the environment): BACKGROUND_KIND.
 vec4 background_radiance(vec2 pixel) {
-    if (frame.draw_info.y == 1) {
+    if (BACKGROUND_KIND == 1) {
         return vec4(sharp_radiance(camera_ray(pixel)), 1.0);
     }
     return frame.background_color;

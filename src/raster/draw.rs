@@ -124,10 +124,10 @@ pub enum MeshShading {
 enum PipelineKind {
     GBuffer,
     /// The shading pass's first draw (coverage_body.glsl); keyed by the G-buffer's sample count,
-    /// draws single-sampled.
-    Coverage,
+    /// draws single-sampled. `true`: the environment is the background.
+    Coverage(bool),
     /// The shading pass's second draw (shade_body.glsl); keyed like Coverage.
-    Shade,
+    Shade(bool),
     Trivial,
     /// The background of a forward draw.
     Background,
@@ -235,8 +235,12 @@ impl LacquerRenderer {
             const COLOR_FORMAT: [Format; 1] = [Format::Rgba32Float];
             // frame.glsl's ENV_LAYER_COUNT (constant_id 0): a sampler array may only be indexed
             // by constants on lavapipe, and a constant K lets the shader skip the absent layers.
-            // shade_body.glsl's SAMPLE_COUNT is constant_id 1.
-            let constants = [layer_count, samples];
+            // shade_body.glsl's SAMPLE_COUNT is constant_id 1, frame.glsl's BACKGROUND_KIND 2.
+            let environment_background = matches!(
+                kind,
+                PipelineKind::Coverage(true) | PipelineKind::Shade(true)
+            );
+            let constants = [layer_count, samples, u32::from(environment_background)];
             let mesh = |name, fragment_spirv, color_formats| GraphicsPipelineDesc {
                 name,
                 vertex_spirv: MESH_VERT,
@@ -274,7 +278,7 @@ impl LacquerRenderer {
                 PipelineKind::Trivial => mesh("trivial", TRIVIAL_FRAG, &COLOR_FORMAT),
                 // Writes 0 (covered) or 1 (the clear value, passing as equal so the background
                 // colour is written too) into the coverage depth.
-                PipelineKind::Coverage => full_screen(
+                PipelineKind::Coverage(_) => full_screen(
                     "coverage",
                     if multisampled {
                         COVERAGE_MS_FRAG
@@ -289,7 +293,7 @@ impl LacquerRenderer {
                     }),
                 ),
                 // 1 > 0 passes where a sample is covered; early, so uncovered blocks are skipped.
-                PipelineKind::Shade => full_screen(
+                PipelineKind::Shade(_) => full_screen(
                     "shade",
                     if multisampled {
                         SHADE_MS_FRAG
@@ -407,9 +411,13 @@ impl LacquerRenderer {
             MeshShading::Trivial => PipelineKind::Trivial,
         };
         self.ensure_pipeline(gpu, mesh_kind, samples, layer_count)?;
+        let (coverage_kind, shade_kind) = (
+            PipelineKind::Coverage(with_background),
+            PipelineKind::Shade(with_background),
+        );
         if deferred {
-            self.ensure_pipeline(gpu, PipelineKind::Coverage, samples, layer_count)?;
-            self.ensure_pipeline(gpu, PipelineKind::Shade, samples, layer_count)?;
+            self.ensure_pipeline(gpu, coverage_kind, samples, layer_count)?;
+            self.ensure_pipeline(gpu, shade_kind, samples, layer_count)?;
         }
         let forward_background = !deferred && with_background;
         if forward_background {
@@ -465,7 +473,7 @@ impl LacquerRenderer {
             Attachments::Deferred {
                 position, normal, ..
             } => {
-                let shade_pipeline = pipeline(PipelineKind::Shade)?;
+                let shade_pipeline = pipeline(shade_kind)?;
                 let set = shade_descriptor_set(
                     gpu,
                     shade_pipeline,
@@ -474,7 +482,7 @@ impl LacquerRenderer {
                     sampler,
                     (position, normal),
                 )?;
-                Some((pipeline(PipelineKind::Coverage)?, shade_pipeline, set))
+                Some((pipeline(coverage_kind)?, shade_pipeline, set))
             }
             Attachments::Forward { .. } => None,
         };
@@ -599,10 +607,7 @@ impl LacquerRenderer {
                 buffers.object_frames[i].write(std::slice::from_ref(&frame))?;
             }
         }
-        frame.draw_info = match scene.background {
-            Background::Environment => [0, FrameUniforms::BACKGROUND_ENVIRONMENT, 0, 0],
-            _ => [0, FrameUniforms::BACKGROUND_CONSTANT, 0, 0],
-        };
+        frame.draw_info = [0; 4];
         frame.background_color = match scene.background {
             Background::Color([r, g, b]) => [r, g, b, 1.0],
             Background::Transparent | Background::Environment => [0.0; 4],
