@@ -254,6 +254,8 @@ pub struct GraphicsPipelineDesc<'a> {
     pub depth_test: Option<DepthTest>,
     /// The fragment stage's 32-bit specialization constants: entry i sets `constant_id = i`.
     pub fragment_constants: &'a [u32],
+    /// false: the colour attachments keep their values (a depth-only draw).
+    pub color_writes: bool,
 }
 
 /// A graphics pipeline for dynamic rendering (no render pass objects), with dynamic viewport and
@@ -341,7 +343,11 @@ impl GraphicsPipeline {
         let blend_attachments = vec![
             vk::PipelineColorBlendAttachmentState::default()
                 .blend_enable(false)
-                .color_write_mask(vk::ColorComponentFlags::RGBA);
+                .color_write_mask(if desc.color_writes {
+                    vk::ColorComponentFlags::RGBA
+                } else {
+                    vk::ColorComponentFlags::empty()
+                });
             desc.color_formats.len()
         ];
         let blend =

@@ -256,6 +256,7 @@ impl LacquerRenderer {
                     write: true,
                 }),
                 fragment_constants: &constants[..1],
+                color_writes: true,
             };
             // background.vert's triangle lies at depth 1.
             let full_screen =
@@ -271,6 +272,8 @@ impl LacquerRenderer {
                     samples,
                     depth_test,
                     fragment_constants: &constants,
+                    // A colour background is the clear colour: coverage.frag writes only depth.
+                    color_writes: kind != PipelineKind::Coverage(false),
                 };
             let multisampled = samples > 1;
             let desc = match kind {
