@@ -98,6 +98,7 @@ fn quick_bench_reports_every_stage_as_json() {
         "batch.images_per_second",
         "batch.gpu_per_image",
         "startup.cold",
+        "startup.driver_cache_only",
         "startup.warm",
         "memory.cold_peak_mib",
         "memory.warm_peak_mib",

@@ -35,8 +35,9 @@ pub fn run(config: &BenchConfig) -> Result<MemoryBench> {
     let (mut cold, mut warm) = (Vec::new(), Vec::new());
     for _ in 0..runs {
         let scratch = ScratchDir::new("memory")?;
-        cold.push(mib(run_child(config, &scratch.0)?.peak_rss_kib)?);
-        warm.push(mib(run_child(config, &scratch.0)?.peak_rss_kib)?);
+        let mesa = scratch.0.join("mesa");
+        cold.push(mib(run_child(config, &scratch.0, &mesa)?.peak_rss_kib)?);
+        warm.push(mib(run_child(config, &scratch.0, &mesa)?.peak_rss_kib)?);
     }
     let (cold, warm) = (Stat::of(cold), Stat::of(warm));
     let worst = cold.median.max(warm.median);

@@ -1,7 +1,15 @@
 //! Start-up benchmark: wall time from spawning `shikki render` (this executable, the default scene:
 //! two bowls and a tray lit by the 1024 × 512 studio environment) to its exit with the image
-//! written. Cold: empty cache directory every run (no pipeline cache, no prefiltered environment).
-//! Warm: the same directory after a first run filled it.
+//! written.
+//!
+//! - Cold: every cache empty, every run: shikki's (pipeline cache, prefiltered environments) and
+//!   the driver's. Mesa keeps compiled shaders in its own on-disk cache (`MESA_SHADER_CACHE_DIR`,
+//!   by default under `~/.cache`); on lavapipe that is where a warm start saves the LLVM
+//!   compilation, since the Vulkan pipeline cache there is a bare header. The child gets a fresh
+//!   one inside the scratch directory, so "cold" is a first run on a fresh machine.
+//! - Driver cache only: shikki's caches empty, the driver's shader cache filled (shikki run before
+//!   with another cache directory): what the prefiltered-environment cache alone saves.
+//! - Warm: every cache filled by a first run.
 
 use std::path::Path;
 use std::process::Command;
@@ -23,6 +31,8 @@ pub const PEAK_MEMORY_PREFIX: &str = "shikki-peak-rss-kib=";
 pub struct StartupBench {
     pub command: String,
     pub cold: Stat,
+    /// shikki's caches empty, the driver's shader cache filled.
+    pub driver_cache_only: Stat,
     pub warm: Stat,
     /// warm.median / cold.median.
     pub warm_over_cold: f64,
@@ -45,8 +55,13 @@ pub(crate) fn render_args(config: &BenchConfig, out: &Path) -> Vec<String> {
     ]
 }
 
-/// Runs `shikki render` with its caches in `cache_dir`; fails with the child's stderr.
-pub(crate) fn run_child(config: &BenchConfig, cache_dir: &Path) -> Result<ChildRun> {
+/// Runs `shikki render` with its caches in `cache_dir` and Mesa's shader cache in
+/// `driver_cache_dir`; fails with the child's stderr.
+pub(crate) fn run_child(
+    config: &BenchConfig,
+    cache_dir: &Path,
+    driver_cache_dir: &Path,
+) -> Result<ChildRun> {
     let exe = std::env::current_exe().map_err(|source| Error::Read {
         path: "current executable".into(),
         source,
@@ -57,6 +72,8 @@ pub(crate) fn run_child(config: &BenchConfig, cache_dir: &Path) -> Result<ChildR
         .args(render_args(config, &out))
         .env("SHIKKI_PIPELINE_CACHE", cache_dir.join("pipelines.bin"))
         .env_remove("SHIKKI_ENV_CACHE")
+        .env("MESA_SHADER_CACHE_DIR", driver_cache_dir)
+        .env_remove("MESA_SHADER_CACHE_DISABLE")
         .env(REPORT_PEAK_MEMORY, "1")
         .output()
         .map_err(|source| Error::Read {
@@ -83,21 +100,31 @@ pub(crate) fn run_child(config: &BenchConfig, cache_dir: &Path) -> Result<ChildR
 }
 
 pub fn run(config: &BenchConfig) -> Result<StartupBench> {
-    let (mut cold, mut warm) = (Vec::new(), Vec::new());
+    let (mut cold, mut driver_only, mut warm) = (Vec::new(), Vec::new(), Vec::new());
     for run in 0..=config.runs {
-        // A fresh directory: nothing cached.
+        // A fresh directory: nothing cached, not even by the driver.
         let scratch = ScratchDir::new("startup")?;
-        let seconds = run_child(config, &scratch.0)?.seconds;
+        let seconds = run_child(config, &scratch.0, &scratch.0.join("mesa"))?.seconds;
         if run > 0 {
             cold.push(seconds);
         }
     }
-    let scratch = ScratchDir::new("startup-warm")?;
-    run_child(config, &scratch.0)?; // fills the caches (and warms the OS file cache)
-    for _ in 0..config.runs {
-        warm.push(run_child(config, &scratch.0)?.seconds);
+    let driver = ScratchDir::new("startup-driver")?;
+    for run in 0..=config.runs {
+        let scratch = ScratchDir::new("startup")?;
+        // Run 0 fills the driver's cache.
+        let seconds = run_child(config, &scratch.0, &driver.0)?.seconds;
+        if run > 0 {
+            driver_only.push(seconds);
+        }
     }
-    let (cold, warm) = (Stat::of(cold), Stat::of(warm));
+    let scratch = ScratchDir::new("startup-warm")?;
+    let mesa = scratch.0.join("mesa");
+    run_child(config, &scratch.0, &mesa)?; // fills the caches (and warms the OS file cache)
+    for _ in 0..config.runs {
+        warm.push(run_child(config, &scratch.0, &mesa)?.seconds);
+    }
+    let (cold, driver_cache_only, warm) = (Stat::of(cold), Stat::of(driver_only), Stat::of(warm));
     let ratio = warm.median / cold.median;
     Ok(StartupBench {
         command: format!(
@@ -105,6 +132,7 @@ pub fn run(config: &BenchConfig) -> Result<StartupBench> {
             render_args(config, Path::new("OUT.png")).join(" ")
         ),
         cold,
+        driver_cache_only,
         warm,
         warm_over_cold: ratio,
         target: Target::at_most("startup: warm / cold", ratio, WARM_LIMIT),

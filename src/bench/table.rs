@@ -97,8 +97,20 @@ pub fn markdown(report: &BenchReport) -> String {
         ));
     }
     if let Some(s) = &r.startup {
-        row("startup", format!("cold: `{}`", s.command), &s.cold);
-        row("startup", "warm (caches filled)".into(), &s.warm);
+        row(
+            "startup",
+            format!(
+                "cold (every cache empty, the driver's too): `{}`",
+                s.command
+            ),
+            &s.cold,
+        );
+        row(
+            "startup",
+            "shikki's caches empty, the driver's shader cache filled".into(),
+            &s.driver_cache_only,
+        );
+        row("startup", "warm (every cache filled)".into(), &s.warm);
     }
     if let Some(m) = &r.memory {
         derived.push_str(&format!(
