@@ -64,15 +64,17 @@ vec3 prefiltered_radiance(vec3 dir, float beta) {
         if (beta < beta1) {
             t = beta / beta1;
         } else {
-            k0 = count - 1;
-            float log_lo = 0.0;
-            float log_hi = 1.0;
-            for (int k = 1; k < count - 1; ++k) {
-                if (beta < layer_beta(k + 1)) {
+            // k0: the last layer k ≥ 1 with β_k ≤ β (β_k increase with k), and t = 0 on the last
+            // layer. Written as a fixed run of selects over the constant K, not a search loop:
+            // llvmpipe runs a loop until every lane has left it, with its bookkeeping per lap.
+            k0 = 1;
+            float log_lo = layer_log_beta(1);
+            float log_hi = layer_log_beta(min(2, count - 1));
+            for (int k = 2; k < count; ++k) {
+                if (beta >= layer_beta(k)) {
                     k0 = k;
                     log_lo = layer_log_beta(k);
-                    log_hi = layer_log_beta(k + 1);
-                    break;
+                    log_hi = layer_log_beta(min(k + 1, count - 1));
                 }
             }
             if (k0 < count - 1) {

@@ -13,6 +13,11 @@
 
 #include "math.glsl"
 
+// Set per pipeline (raster/draw.rs) when every table of the draw has its knots at exactly i·step
+// degrees with step a power of two, checked on the host: then θ/step is exact and its integer part
+// is the interval, with no check or search (llvmpipe runs a search loop's body at least once).
+layout(constant_id = 3) const bool FRESNEL_POW2_GRID = false;
+
 // Knots of the Fresnel table: (angle_deg, r, g, b), angles strictly increasing from 0 to 90.
 layout(std430, set = FRESNEL_SET, binding = FRESNEL_BINDING) readonly buffer FresnelTable {
     vec4 fresnel_knots[];
@@ -91,8 +96,9 @@ vec3 fresnel_table(float theta_deg, int first, int count) {
     int last = count - 2;
     float step = fresnel_knots[first + 1].x - fresnel_knots[first + 0].x;
     int lo = clamp(int(theta / step), 0, last);
-    bool found = fresnel_knots[first + lo].x <= theta
-        && (lo == last || fresnel_knots[first + lo + 1].x > theta);
+    bool found = FRESNEL_POW2_GRID
+        || (fresnel_knots[first + lo].x <= theta
+            && (lo == last || fresnel_knots[first + lo + 1].x > theta));
     int hi = lo + 1;
     if (!found) {
         // Binary search for the last knot with angle <= theta (log2(91) ≈ 7 steps).

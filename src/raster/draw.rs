@@ -120,6 +120,31 @@ pub enum MeshShading {
     Trivial,
 }
 
+/// The specialization constants of a shading pipeline that depend on the draw.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+struct ShadeVariant {
+    /// frame.glsl's BACKGROUND_KIND: the environment (else a colour) fills uncovered samples.
+    environment_background: bool,
+    /// lacquer_brdf.glsl's FRESNEL_POW2_GRID: see [`fresnel_on_pow2_grid`].
+    fresnel_pow2_grid: bool,
+}
+
+/// Whether a table's knots (as the shader reads them, f32) lie at exactly i·step degrees from 0
+/// with step a power of two, so that θ/step is exact and its integer part is the interval the
+/// shader's search would find. The built-in tables (a knot per degree) do.
+fn fresnel_on_pow2_grid(knots: &[[f32; 4]]) -> bool {
+    let step = match knots {
+        [first, second, ..] if first[0] == 0.0 => second[0] - first[0],
+        _ => return false,
+    };
+    let power_of_two = step.is_normal() && step > 0.0 && step.to_bits() & 0x007f_ffff == 0;
+    power_of_two
+        && knots
+            .iter()
+            .enumerate()
+            .all(|(i, knot)| i < (1 << 24) && knot[0] == i as f32 * step)
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 enum PipelineKind {
     GBuffer,
@@ -127,7 +152,7 @@ enum PipelineKind {
     /// draws single-sampled. `true`: the environment is the background.
     Coverage(bool),
     /// The shading pass's second draw (shade_body.glsl); keyed like Coverage.
-    Shade(bool),
+    Shade(ShadeVariant),
     Trivial,
     /// The background of a forward draw.
     Background,
@@ -236,11 +261,20 @@ impl LacquerRenderer {
             // frame.glsl's ENV_LAYER_COUNT (constant_id 0): a sampler array may only be indexed
             // by constants on lavapipe, and a constant K lets the shader skip the absent layers.
             // shade_body.glsl's SAMPLE_COUNT is constant_id 1, frame.glsl's BACKGROUND_KIND 2.
-            let environment_background = matches!(
-                kind,
-                PipelineKind::Coverage(true) | PipelineKind::Shade(true)
-            );
-            let constants = [layer_count, samples, u32::from(environment_background)];
+            let variant = match kind {
+                PipelineKind::Shade(variant) => variant,
+                PipelineKind::Coverage(environment_background) => ShadeVariant {
+                    environment_background,
+                    fresnel_pow2_grid: false,
+                },
+                _ => ShadeVariant::default(),
+            };
+            let constants = [
+                layer_count,
+                samples,
+                u32::from(variant.environment_background),
+                u32::from(variant.fresnel_pow2_grid),
+            ];
             let mesh = |name, fragment_spirv, color_formats| GraphicsPipelineDesc {
                 name,
                 vertex_spirv: MESH_VERT,
@@ -416,7 +450,13 @@ impl LacquerRenderer {
         self.ensure_pipeline(gpu, mesh_kind, samples, layer_count)?;
         let (coverage_kind, shade_kind) = (
             PipelineKind::Coverage(with_background),
-            PipelineKind::Shade(with_background),
+            PipelineKind::Shade(ShadeVariant {
+                environment_background: with_background,
+                fresnel_pow2_grid: scene
+                    .objects
+                    .iter()
+                    .all(|o| fresnel_on_pow2_grid(&shading::fresnel_knots(o.fresnel))),
+            }),
         );
         if deferred {
             self.ensure_pipeline(gpu, coverage_kind, samples, layer_count)?;
