@@ -26,9 +26,11 @@ impl ImageUse {
 
 /// The attachments of one dynamic-rendering pass.
 pub struct RenderTargets<'a> {
-    /// Multisampled (or single-sampled) colour targets in location order, each cleared to
-    /// `clear_color`; at least one.
+    /// Multisampled (or single-sampled) colour targets in location order; at least one. The
+    /// first `cleared_colors` are cleared to `clear_color`, the rest start undefined (every
+    /// sample a draw covers is written, and the rest are never read).
     pub colors: &'a [&'a Image],
+    pub cleared_colors: usize,
     /// Single-sampled image the first colour is resolved into (averaged) when it is multisampled.
     pub resolve: Option<&'a Image>,
     /// Cleared to 1; None for a pass without depth (its colour targets may differ in samples).
@@ -117,11 +119,16 @@ impl Recorder<'_> {
         let mut colors: Vec<vk::RenderingAttachmentInfo> = targets
             .colors
             .iter()
-            .map(|image| {
+            .enumerate()
+            .map(|(i, image)| {
                 vk::RenderingAttachmentInfo::default()
                     .image_view(image.view)
                     .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                    .load_op(vk::AttachmentLoadOp::CLEAR)
+                    .load_op(if i < targets.cleared_colors {
+                        vk::AttachmentLoadOp::CLEAR
+                    } else {
+                        vk::AttachmentLoadOp::DONT_CARE
+                    })
                     .store_op(vk::AttachmentStoreOp::STORE)
                     .clear_value(vk::ClearValue {
                         color: vk::ClearColorValue {
@@ -198,6 +205,23 @@ impl Recorder<'_> {
         unsafe {
             self.device
                 .cmd_set_viewport(self.cmd, 0, std::slice::from_ref(&viewport))
+        };
+    }
+
+    /// Limits the following draws to the target pixels `x..x + width`, `y..y + height`
+    /// (`begin_rendering` sets the whole target).
+    pub fn set_scissor(&mut self, x: u32, y: u32, width: u32, height: u32) {
+        let scissor = vk::Rect2D {
+            offset: vk::Offset2D {
+                x: x.min(i32::MAX as u32) as i32,
+                y: y.min(i32::MAX as u32) as i32,
+            },
+            extent: vk::Extent2D { width, height },
+        };
+        // SAFETY: recording; the pipelines declare the scissor dynamic.
+        unsafe {
+            self.device
+                .cmd_set_scissor(self.cmd, 0, std::slice::from_ref(&scissor))
         };
     }
 

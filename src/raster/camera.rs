@@ -147,6 +147,69 @@ impl Camera {
     }
 }
 
+/// A rectangle of pixels: columns `x0..x1`, rows `y0..y1` (row 0 at the top).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelRect {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+}
+
+impl PixelRect {
+    pub fn is_empty(&self) -> bool {
+        self.x0 >= self.x1 || self.y0 >= self.y1
+    }
+}
+
+impl Camera {
+    /// Pixels that can hold a sample of anything inside the axis-aligned box `min..max`, for a
+    /// `width` × `height` image: the projections of the box's corners, widened by 2 pixels for
+    /// rounding, clamped to the image. The whole image when a corner is not in front of the
+    /// camera (the box straddles the eye plane, so its projection is unbounded).
+    pub fn screen_bounds(
+        &self,
+        (min, max): (DVec3, DVec3),
+        width: u32,
+        height: u32,
+        scene_radius: f64,
+    ) -> PixelRect {
+        let whole = PixelRect {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        };
+        let aspect = f64::from(width.max(1)) / f64::from(height.max(1));
+        let (near, far) = self.depth_range(scene_radius);
+        let view_projection = self.projection_vulkan(aspect, near, far) * self.view_matrix();
+        let (mut lo, mut hi) = (glam::DVec2::splat(f64::INFINITY), glam::DVec2::NEG_INFINITY);
+        for corner in 0..8 {
+            let pick = |bit: u32, a: f64, b: f64| if corner & bit == 0 { a } else { b };
+            let point = DVec3::new(
+                pick(1, min.x, max.x),
+                pick(2, min.y, max.y),
+                pick(4, min.z, max.z),
+            );
+            let clip = view_projection * point.extend(1.0);
+            if !(clip.w > 1e-9 && clip.is_finite()) {
+                return whole;
+            }
+            let ndc = clip.truncate().truncate() / clip.w;
+            let pixel = (ndc + 1.0) * 0.5 * glam::DVec2::new(f64::from(width), f64::from(height));
+            lo = lo.min(pixel);
+            hi = hi.max(pixel);
+        }
+        let clamp = |v: f64, limit: u32| v.clamp(0.0, f64::from(limit)) as u32;
+        PixelRect {
+            x0: clamp((lo.x - 2.0).floor(), width),
+            y0: clamp((lo.y - 2.0).floor(), height),
+            x1: clamp((hi.x + 2.0).ceil(), width),
+            y1: clamp((hi.y + 2.0).ceil(), height),
+        }
+    }
+}
+
 fn format_vec(v: DVec3) -> String {
     format!("{},{},{}", v.x, v.y, v.z)
 }
@@ -267,6 +330,64 @@ mod tests {
         // Exact in f64 up to a few ulps.
         assert!(at(-2.0).abs() < 1e-12);
         assert!((at(-10.0) - 1.0).abs() < 1e-12);
+    }
+
+    /// Every vertex of the bowl projects inside its box's screen bounds (with a pixel to spare
+    /// for the rasteriser's sample positions), from several viewpoints; a box reaching behind the
+    /// eye gives the whole image.
+    #[test]
+    fn screen_bounds_contain_every_projected_vertex() {
+        let bowl = crate::raster::BuiltinMesh::Bowl.mesh();
+        let bounds = bowl.bounding_box().unwrap();
+        let (w, h) = (320, 200);
+        for eye in [
+            DVec3::new(1.3, 2.1, 3.7),
+            DVec3::new(0.0, 0.2, 2.0),
+            DVec3::new(-3.0, 1.0, 0.5),
+        ] {
+            let camera = Camera {
+                eye,
+                ..oblique_camera()
+            };
+            let r = camera.screen_bounds(bounds, w, h, bowl.bounding_radius());
+            assert!(!r.is_empty() && r.x1 <= w && r.y1 <= h, "{r:?}");
+            assert!(
+                r != PixelRect {
+                    x0: 0,
+                    y0: 0,
+                    x1: w,
+                    y1: h
+                },
+                "a bowl in view is not the whole image"
+            );
+            let vp = camera.view_projection(w, h, bowl.bounding_radius());
+            for p in &bowl.positions {
+                let point = DVec3::new(p[0].into(), p[1].into(), p[2].into());
+                let (x, y, _) = project_to_pixel(vp, point, w, h);
+                // A pixel to spare inside every side the image edge does not clamp.
+                let within = |v: f64, lo: u32, hi: u32, limit: u32| {
+                    (lo == 0 || v >= f64::from(lo) + 1.0)
+                        && (hi == limit || v <= f64::from(hi) - 1.0)
+                };
+                assert!(
+                    within(x, r.x0, r.x1, w) && within(y, r.y0, r.y1, h),
+                    "vertex at pixel ({x}, {y}) outside {r:?}"
+                );
+            }
+        }
+        let inside = Camera {
+            eye: DVec3::new(0.0, 0.3, 0.0),
+            ..oblique_camera()
+        };
+        assert_eq!(
+            inside.screen_bounds(bounds, w, h, 1.0),
+            PixelRect {
+                x0: 0,
+                y0: 0,
+                x1: w,
+                y1: h
+            }
+        );
     }
 
     #[test]

@@ -25,9 +25,9 @@ use crate::gpu::{
 };
 use crate::model::{BrdfParams, FresnelTable};
 use crate::output::HdrImage;
-use crate::raster::camera::Camera;
+use crate::raster::camera::{Camera, PixelRect};
 use crate::raster::draw_record::{
-    record_and_submit, timings_from, Passes, RecordedDraw, Strip, TIMESTAMPS,
+    record_and_submit, timings_from, DeferredPasses, Passes, RecordedDraw, Strip, TIMESTAMPS,
 };
 use crate::raster::draw_targets::{Attachments, TargetCache, TargetKind};
 use crate::raster::gpu_mesh::{upload, GpuMesh, VERTEX_ATTRIBUTES, VERTEX_STRIDE};
@@ -535,6 +535,12 @@ impl LacquerRenderer {
             Background::Transparent | Background::Environment => [0.0; 4],
             Background::Color([r, g, b]) => [r, g, b, 1.0],
         };
+        let scene_radius = scene
+            .objects
+            .iter()
+            .map(|o| o.mesh.bounding_radius())
+            .fold(0.0, f64::max);
+        let shaded = screen_bounds(scene, settings, scene_radius);
         let mut timings: Option<DrawTimings> = stamps.map(|_| DrawTimings::default());
         let mut first_row = 0;
         while first_row < settings.height {
@@ -549,13 +555,19 @@ impl LacquerRenderer {
                 }
             }
             let passes = match &shade {
-                Some((coverage_pipeline, shade_pipeline, shade_set)) => Passes::Deferred {
-                    gbuffer_pipeline: mesh_pipeline,
-                    objects: objects.clone(),
-                    coverage_pipeline,
-                    shade_pipeline,
-                    shade_set,
-                },
+                Some((coverage_pipeline, shade_pipeline, shade_set)) => {
+                    Passes::Deferred(DeferredPasses {
+                        gbuffer_pipeline: mesh_pipeline,
+                        objects: objects.clone(),
+                        coverage_pipeline,
+                        shade_pipeline,
+                        shade_set,
+                        shaded,
+                        // The environment background is drawn by the coverage pass.
+                        coverage_everywhere: with_background,
+                        clear_color,
+                    })
+                }
                 None => Passes::Forward {
                     background: background.as_ref().map(|(p, s)| (*p, s)),
                     mesh_pipeline,
@@ -744,6 +756,35 @@ fn shade_descriptor_set(
     )?)
 }
 
+/// The pixels any object can cover (the union of their boxes' screen bounds); empty without
+/// objects.
+fn screen_bounds(scene: &DrawScene<'_>, settings: &RenderSettings, scene_radius: f64) -> PixelRect {
+    let mut union: Option<PixelRect> = None;
+    for object in scene.objects {
+        let Some(bounds) = object.mesh.bounding_box() else {
+            continue;
+        };
+        let r = scene
+            .camera
+            .screen_bounds(bounds, settings.width, settings.height, scene_radius);
+        union = Some(match union {
+            None => r,
+            Some(u) => PixelRect {
+                x0: u.x0.min(r.x0),
+                y0: u.y0.min(r.y0),
+                x1: u.x1.max(r.x1),
+                y1: u.y1.max(r.y1),
+            },
+        });
+    }
+    union.unwrap_or(PixelRect {
+        x0: 0,
+        y0: 0,
+        x1: 0,
+        y1: 0,
+    })
+}
+
 fn validate(gpu: &GpuContext, scene: &DrawScene<'_>, settings: &RenderSettings) -> Result<()> {
     let max = gpu.info().max_image_dimension_2d;
     for (field, value) in [("width", settings.width), ("height", settings.height)] {
@@ -786,4 +827,36 @@ fn validate(gpu: &GpuContext, scene: &DrawScene<'_>, settings: &RenderSettings) 
         object.mesh.validate()?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fresnel_on_pow2_grid;
+
+    fn knots(angles: &[f32]) -> Vec<[f32; 4]> {
+        angles.iter().map(|&a| [a, 0.1, 0.2, 0.3]).collect()
+    }
+
+    /// The shader skips its interval search only for tables whose knots are exactly i·2^e.
+    #[test]
+    fn pow2_grid_is_recognised_exactly() {
+        let degrees: Vec<f32> = (0..=90).map(|i| i as f32).collect();
+        assert!(fresnel_on_pow2_grid(&knots(&degrees)));
+        let halves: Vec<f32> = (0..=180).map(|i| i as f32 * 0.5).collect();
+        assert!(fresnel_on_pow2_grid(&knots(&halves)));
+        let fives: Vec<f32> = (0..=18).map(|i| i as f32 * 5.0).collect();
+        assert!(
+            !fresnel_on_pow2_grid(&knots(&fives)),
+            "5 is not a power of two"
+        );
+        let mut uneven = degrees.clone();
+        uneven[40] = 40.5;
+        assert!(!fresnel_on_pow2_grid(&knots(&uneven)));
+        assert!(
+            !fresnel_on_pow2_grid(&knots(&[1.0, 2.0, 3.0])),
+            "must start at 0"
+        );
+        assert!(!fresnel_on_pow2_grid(&knots(&[0.0])));
+        assert!(!fresnel_on_pow2_grid(&knots(&[0.0, 0.0])));
+    }
 }

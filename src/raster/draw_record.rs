@@ -13,6 +13,7 @@ use crate::gpu::{
     Access, DescriptorSet, GpuContext, GraphicsPipeline, Image, ImageUse, Layout, Recorder,
     RenderTargets, TimestampPool,
 };
+use crate::raster::camera::PixelRect;
 use crate::raster::draw::DrawTimings;
 use crate::raster::draw_targets::{Attachments, DrawTargets};
 use crate::raster::gpu_mesh::GpuMesh;
@@ -34,20 +35,30 @@ pub(crate) struct Strip {
 
 /// The passes of one draw.
 pub(crate) enum Passes<'a> {
-    Deferred {
-        gbuffer_pipeline: &'a GraphicsPipeline,
-        objects: Vec<(&'a GpuMesh, &'a DescriptorSet)>,
-        /// coverage.frag and shade.frag, sharing one descriptor set.
-        coverage_pipeline: &'a GraphicsPipeline,
-        shade_pipeline: &'a GraphicsPipeline,
-        shade_set: &'a DescriptorSet,
-    },
+    Deferred(DeferredPasses<'a>),
     Forward {
         background: Option<(&'a GraphicsPipeline, &'a DescriptorSet)>,
         mesh_pipeline: &'a GraphicsPipeline,
         objects: Vec<(&'a GpuMesh, &'a DescriptorSet)>,
         clear_color: [f32; 4],
     },
+}
+
+/// The lacquer draw's passes.
+pub(crate) struct DeferredPasses<'a> {
+    pub gbuffer_pipeline: &'a GraphicsPipeline,
+    pub objects: Vec<(&'a GpuMesh, &'a DescriptorSet)>,
+    /// coverage.frag and shade.frag, sharing one descriptor set.
+    pub coverage_pipeline: &'a GraphicsPipeline,
+    pub shade_pipeline: &'a GraphicsPipeline,
+    pub shade_set: &'a DescriptorSet,
+    /// Image pixels that may be covered (the meshes' screen bounds): the shading pass touches
+    /// only these, the rest keep the clear colour.
+    pub shaded: PixelRect,
+    /// Whether the coverage draw fills every pixel (it writes the background), not only
+    /// `shaded`.
+    pub coverage_everywhere: bool,
+    pub clear_color: [f32; 4],
 }
 
 /// Everything one submit draws with.
@@ -70,7 +81,7 @@ fn discard(access: Access) -> ImageUse {
 pub(crate) fn record_and_submit(gpu: &GpuContext, draw: &RecordedDraw<'_>) -> Result<()> {
     let mismatch = || Error::invalid("render targets", "of the other kind", "internal error");
     match (&draw.passes, &draw.targets.attachments) {
-        (Passes::Deferred { .. }, Attachments::Deferred { .. })
+        (Passes::Deferred(_), Attachments::Deferred { .. })
         | (Passes::Forward { .. }, Attachments::Forward { .. }) => {}
         _ => return Err(mismatch()),
     }
@@ -78,13 +89,7 @@ pub(crate) fn record_and_submit(gpu: &GpuContext, draw: &RecordedDraw<'_>) -> Re
         mark(rec, draw.stamps, 0);
         match (&draw.passes, &draw.targets.attachments) {
             (
-                Passes::Deferred {
-                    gbuffer_pipeline,
-                    objects,
-                    coverage_pipeline,
-                    shade_pipeline,
-                    shade_set,
-                },
+                Passes::Deferred(passes),
                 Attachments::Deferred {
                     position,
                     normal,
@@ -99,9 +104,7 @@ pub(crate) fn record_and_submit(gpu: &GpuContext, draw: &RecordedDraw<'_>) -> Re
                     output,
                     coverage,
                 },
-                (gbuffer_pipeline, objects),
-                [coverage_pipeline, shade_pipeline],
-                shade_set,
+                passes,
             ),
             (
                 Passes::Forward {
@@ -171,10 +174,19 @@ fn record_deferred(
     rec: &mut Recorder<'_>,
     draw: &RecordedDraw<'_>,
     images: DeferredTargets<'_>,
-    (gbuffer_pipeline, objects): (&GraphicsPipeline, &[(&GpuMesh, &DescriptorSet)]),
-    [coverage_pipeline, shade_pipeline]: [&GraphicsPipeline; 2],
-    shade_set: &DescriptorSet,
+    passes: &DeferredPasses<'_>,
 ) {
+    let DeferredPasses {
+        gbuffer_pipeline,
+        objects,
+        coverage_pipeline,
+        shade_pipeline,
+        shade_set,
+        shaded,
+        coverage_everywhere,
+        clear_color,
+    } = passes;
+    let (shaded, coverage_everywhere, clear_color) = (*shaded, *coverage_everywhere, *clear_color);
     let targets = draw.targets;
     let shader_read = ImageUse::new(Access::GraphicsShaderRead, Layout::ShaderRead);
     // First use: nothing to wait for. Reuse: the previous strip's or draw's shading pass read the
@@ -202,6 +214,8 @@ fn record_deferred(
     mark(rec, draw.stamps, 1);
     rec.begin_rendering(&RenderTargets {
         colors: &images.gbuffer,
+        // The normals are read only where the position marks a covered sample.
+        cleared_colors: 1,
         resolve: None,
         depth: Some(&targets.depth),
         // w = 0: no object covers the sample.
@@ -215,15 +229,42 @@ fn record_deferred(
     }
     rec.begin_rendering(&RenderTargets {
         colors: &[images.output],
+        cleared_colors: 1,
         resolve: None,
         depth: Some(images.coverage),
-        // Every pixel is written by coverage.frag.
-        clear_color: [0.0; 4],
+        // The background where it is a colour (or transparent); coverage.frag draws the
+        // environment one.
+        clear_color,
     });
     set_strip_viewport(rec, draw.strip);
-    for pipeline in [coverage_pipeline, shade_pipeline] {
-        rec.bind_graphics(pipeline, shade_set);
+    let strip = draw.strip;
+    // `shaded` in target rows (the target holds image rows first_row..).
+    let rows = (
+        shaded.y0.max(strip.first_row),
+        shaded.y1.min(strip.first_row + strip.rows),
+    );
+    let in_strip = (rows.0 < rows.1 && !shaded.is_empty()).then(|| {
+        (
+            shaded.x0,
+            rows.0 - strip.first_row,
+            shaded.x1 - shaded.x0,
+            rows.1 - rows.0,
+        )
+    });
+    if coverage_everywhere {
+        rec.bind_graphics(coverage_pipeline, shade_set);
         rec.draw(3);
+    }
+    if let Some((x, y, width, height)) = in_strip {
+        rec.set_scissor(x, y, width, height);
+        let pipelines: &[&GraphicsPipeline] = match coverage_everywhere {
+            true => &[shade_pipeline],
+            false => &[coverage_pipeline, shade_pipeline],
+        };
+        for pipeline in pipelines {
+            rec.bind_graphics(pipeline, shade_set);
+            rec.draw(3);
+        }
     }
     rec.end_rendering();
     mark(rec, draw.stamps, 2);
@@ -291,6 +332,7 @@ fn record_forward(
     mark(rec, draw.stamps, 1);
     rec.begin_rendering(&RenderTargets {
         colors: &[color],
+        cleared_colors: 1,
         resolve,
         depth: Some(&targets.depth),
         clear_color,

@@ -83,6 +83,17 @@ impl Mesh {
     }
 
     /// The largest distance of a vertex from the origin (0 for an empty mesh).
+    /// The axis-aligned bounding box (min, max) of the positions; None for a mesh without any.
+    pub fn bounding_box(&self) -> Option<(glam::DVec3, glam::DVec3)> {
+        let first = self.positions.first()?;
+        let first = glam::Vec3::from_array(*first);
+        let (min, max) = self.positions.iter().fold((first, first), |(lo, hi), p| {
+            let p = glam::Vec3::from_array(*p);
+            (lo.min(p), hi.max(p))
+        });
+        Some((min.as_dvec3(), max.as_dvec3()))
+    }
+
     pub fn bounding_radius(&self) -> f64 {
         self.positions
             .iter()
