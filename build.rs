@@ -69,7 +69,7 @@ fn env(name: &str) -> Result<String, String> {
     std::env::var(name).map_err(|_| format!("build.rs: environment variable {name} is not set"))
 }
 
-/// `lacquer.frag` → `LACQUER_FRAG`.
+/// `gbuffer.frag` → `GBUFFER_FRAG`.
 fn const_name(file_name: &str) -> String {
     file_name
         .chars()

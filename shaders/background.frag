@@ -1,7 +1,7 @@
 #version 450
 // The sharp environment (layer 0) seen along each pixel's primary ray (SPEC §1's camera rays):
 // the background of forward draws (the benchmark's trivial shader); the lacquer draw computes it in
-// shade.comp.
+// coverage.frag.
 
 #include "frame.glsl"
 

@@ -1,7 +1,7 @@
 #version 450
 // The lacquer draw's geometry pass: each covered sample keeps what lacquer shading needs, the
 // position and normal interpolated at the pixel centre (what a forward fragment shader would
-// receive) and the object, for shade.comp to shade once per distinct surface (SPEC §2, §4).
+// receive) and the object, for shade.frag to shade once per distinct surface (SPEC §2, §4).
 
 #include "frame.glsl"
 

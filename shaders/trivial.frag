@@ -1,6 +1,7 @@
 #version 450
-// A constant colour: the same geometry as lacquer.frag with no shading cost, so `shikki bench`
-// can measure the rasteriser's floor (vertex work, binning, depth test, MSAA resolve).
+// A constant colour, drawn forward: the same geometry as the lacquer draw with no shading cost, so
+// `shikki bench` can measure the rasteriser's floor (vertex work, binning, depth test, MSAA
+// resolve).
 
 // Declared so the interface matches mesh.vert (validation warns about unconsumed outputs).
 layout(location = 0) in vec3 in_position;

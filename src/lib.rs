@@ -8,7 +8,9 @@
 //!    │  material → BRDF parameters + Fresnel table
 //!    ▼
 //!  raster/ (mesh, camera, lights) ──► gpu/ (ash + gpu-allocator; the only Vulkan `unsafe`)
-//!    │                                   │  lacquer.frag / brdf_eval.comp (shaders/, SPIR-V built by build.rs)
+//!    │                                   │  gbuffer.frag → coverage.frag → shade.frag (the lacquer
+//!    │                                   │  draw, deferred) / brdf_eval.comp (shaders/, SPIR-V
+//!    │                                   │  built by build.rs)
 //!    ▼                                   ▼
 //!  output/ (readback image → EXR linear | PNG exposure → tone curve → sRGB; atomic writes)
 //!

@@ -1,4 +1,4 @@
-//! The raster path (mesh.vert + lacquer.frag on lavapipe) against the CPU oracle's ray-cast of the
+//! The raster path (mesh.vert, gbuffer.frag, coverage.frag and shade.frag on lavapipe) against the CPU oracle's ray-cast of the
 //! analytic shapes, pixel by pixel, at one sample per pixel.
 
 mod common;

@@ -1,6 +1,8 @@
 // The first draw of the lacquer shading pass (coverage.frag, coverage_ms.frag), a full-screen
-// triangle: every pixel gets the background, and the single-sampled depth target records whether
-// any G-buffer sample of the pixel is covered (depth 0) or none is (depth 1, the clear value).
+// triangle (scissored to the meshes' screen bounds when the background is a colour, which is then
+// the clear colour and this draw writes no colour): the single-sampled depth target records
+// whether any G-buffer sample of the pixel is covered (depth 0) or none is (depth 1, the clear
+// value), and with the environment as background every pixel gets it.
 // shade.frag then draws with an early depth test that passes only where depth is 0: llvmpipe skips
 // a block of pixels whose lanes all fail an early depth test, but runs both sides of a branch or a
 // `discard` under a lane mask, so this is how the shading of uncovered pixels is skipped.

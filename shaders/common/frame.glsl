@@ -1,5 +1,5 @@
-// Per-draw uniforms and resources shared by mesh.vert, lacquer.frag and the background pass
-// (std140). The host side is `FrameUniforms` in src/shading.rs: change both together.
+// Per-draw uniforms and resources shared by mesh.vert, gbuffer.frag, the shading pass and the
+// background pass (std140). The host side is `FrameUniforms` in src/shading.rs: change both together.
 #ifndef FRAME_GLSL
 #define FRAME_GLSL
 

@@ -1,5 +1,5 @@
 // The lacquer BRDF of SPEC §2 with the Fresnel table of SPEC §3: the one GLSL definition, included
-// by lacquer.frag (raster) and brdf_eval.comp (the compute evaluator tests compare with the CPU
+// by shade_body.glsl (raster) and brdf_eval.comp (the compute evaluator tests compare with the CPU
 // model in src/model/brdf.rs). Keep the two in step formula by formula.
 //
 // The includer defines FRESNEL_SET and FRESNEL_BINDING before including this file.
@@ -153,7 +153,7 @@ vec3 view_dependent_diffuse(LacquerParams p, vec2 nv) {
 }
 
 // f_r(N, V, L) [1/sr] given the light-independent parts: nv2 = dot_compensated(n, v) and
-// f_diff = view_dependent_diffuse(p, nv2). lacquer.frag computes those once per fragment, not
+// f_diff = view_dependent_diffuse(p, nv2). lacquer_shade.glsl computes those once per point, not
 // once per light; the result is the same operations on the same values as lacquer_brdf.
 vec3 lacquer_brdf_view(LacquerParams p, vec3 n, vec3 v, vec3 l, vec2 nv2, vec3 f_diff) {
     float nv = nv2.x + nv2.y;

@@ -8,6 +8,7 @@
 // surfaces); here each pixel is shaded once per visible surface (BENCHMARKS.md). Pixels no mesh
 // covers already hold the background and fail the early depth test (coverage_body.glsl), which is
 // the one way llvmpipe skips a block of pixels: it runs both sides of a branch under a lane mask.
+// The draw is also scissored to the meshes' screen bounds (raster/draw.rs).
 //
 // The includer defines MULTISAMPLED (sampler2DMS G-buffer) or not (sampler2D).
 

@@ -24,11 +24,11 @@ pub struct RenderBench {
     pub samples: u32,
     pub triangles: usize,
     pub lights: usize,
-    /// GPU time of the mesh pass with lacquer.frag (s).
+    /// GPU time of the lacquer draw: G-buffer pass and shading pass (s).
     pub lacquer_gpu: Stat,
     /// GPU time of the mesh pass with trivial.frag (s).
     pub trivial_gpu: Stat,
-    /// Whole render call with lacquer.frag, uniforms to read-back (s, wall clock).
+    /// Whole lacquer render call, uniforms to read-back (s, wall clock).
     pub lacquer_wall: Stat,
     /// Copy of the resolved image to the readback buffer (s, GPU).
     pub copy_out_gpu: Stat,

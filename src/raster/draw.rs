@@ -4,9 +4,11 @@
 //!
 //! Per draw: write the frame uniforms, the objects' materials and their Fresnel knots → G-buffer
 //! pass (gbuffer.frag: each covered sample keeps its interpolated position, normal and object) →
-//! shading pass (a full-screen triangle, shade.frag / shade_ms.frag: each pixel's distinct surfaces
-//! shaded once, uncovered samples given the background, the samples averaged) → copy to the
-//! readback buffer → barrier to host. The result is what forward shading and an MSAA resolve give, without llvmpipe shading
+//! shading pass, single-sampled: coverage.frag marks in a depth target the pixels with a covered
+//! sample (and draws the environment background), then shade.frag, behind an early depth test and
+//! a scissor to the meshes' screen bounds, shades each pixel's distinct surfaces once, gives the
+//! uncovered samples the background and averages the samples → copy to the readback buffer →
+//! barrier to host. The result is what forward shading and an MSAA resolve give, without llvmpipe shading
 //! whole 4×4 blocks per small triangle and every hidden surface (BENCHMARKS.md). The benchmark's
 //! trivial shader (`MeshShading::Trivial`) is still drawn forward: it is the rasteriser's floor.
 //!
@@ -149,7 +151,7 @@ fn fresnel_on_pow2_grid(knots: &[[f32; 4]]) -> bool {
 enum PipelineKind {
     GBuffer,
     /// The shading pass's first draw (coverage_body.glsl); keyed by the G-buffer's sample count,
-    /// draws single-sampled. `true`: the environment is the background.
+    /// draws single-sampled. `true`: the environment is the background (then it writes colour).
     Coverage(bool),
     /// The shading pass's second draw (shade_body.glsl); keyed like Coverage.
     Shade(ShadeVariant),
