@@ -39,14 +39,18 @@ pub struct PrefilterTimings {
     pub copy_to_images: f64,
 }
 
-/// The prefiltered environment on the device: cube images ready to sample, plus the buffers they
-/// were copied from (kept for read-back by tests and `shikki prefilter`).
+/// The prefiltered environment on the device: cube images ready to sample (and to copy back,
+/// for tests and `shikki prefilter`). The buffers the prefilter wrote are freed once copied.
 pub struct GpuEnvironment {
     pub betas: Vec<f64>,
     pub layers: Vec<Image>,
     pub irradiance: Image,
-    layer_buffers: Vec<(u32, Buffer)>,
-    irradiance_buffer: (u32, Buffer),
+}
+
+/// What the sampled cube images are used for: sampled by the draws, filled by a copy, copied back
+/// by [`GpuEnvironment::read_back`].
+pub(crate) fn cube_image_usage() -> ImageUsage {
+    ImageUsage::SAMPLED | ImageUsage::TRANSFER_DST | ImageUsage::TRANSFER_SRC
 }
 
 fn cube_bytes(face: u32) -> u64 {
@@ -184,7 +188,7 @@ impl GpuPrefilter {
         let irr_set = set(&self.irradiance, mip_of(irr_face)?, &irradiance_buf)?;
 
         // The sampled cube images: layer 0 is the base mip itself.
-        let sampled = ImageUsage::SAMPLED | ImageUsage::TRANSFER_DST;
+        let sampled = cube_image_usage();
         let mut layers =
             vec![gpu.create_image(ImageDesc::cube("layer 0", params.face_size).usage(sampled))?];
         for (face, _) in &layer_buffers {
@@ -271,17 +275,10 @@ impl GpuPrefilter {
             copy_to_images: span(3 + blurred, 4 + blurred),
         };
 
-        // Layer 0's buffer is the base mip; keep it for read-back.
-        let mut mips = mips;
-        let base = mips.swap_remove(0);
-        let mut all_layers = vec![(params.face_size, base)];
-        all_layers.extend(layer_buffers);
         let env = GpuEnvironment {
             betas: plan.iter().map(|l| l.beta).collect(),
             layers,
             irradiance,
-            layer_buffers: all_layers,
-            irradiance_buffer: (irr_face, irradiance_buf),
         };
         Ok((env, timings))
     }
@@ -337,26 +334,29 @@ fn check_source(source: &Equirect, intensity: f64, rotation_deg: f64) -> Result<
 impl GpuEnvironment {
     /// Copies every layer and the irradiance back to the host (tests, `shikki prefilter`).
     pub fn read_back(&self, gpu: &GpuContext) -> Result<PrefilteredEnvironment> {
-        let targets: Vec<(u32, Buffer)> = self
-            .layer_buffers
+        let sources: Vec<&Image> = self
+            .layers
             .iter()
-            .chain(std::iter::once(&self.irradiance_buffer))
-            .map(|(face, _)| {
+            .chain(std::iter::once(&self.irradiance))
+            .collect();
+        let targets: Vec<(u32, Buffer)> = sources
+            .iter()
+            .map(|image| {
+                let face = image.desc().width;
                 Ok((
-                    *face,
-                    gpu.create_buffer(BufferDesc::readback("env readback", cube_bytes(*face)))?,
+                    face,
+                    gpu.create_buffer(BufferDesc::readback("env readback", cube_bytes(face)))?,
                 ))
             })
             .collect::<Result<_>>()?;
-        let sources: Vec<&Buffer> = self
-            .layer_buffers
-            .iter()
-            .chain(std::iter::once(&self.irradiance_buffer))
-            .map(|(_, b)| b)
-            .collect();
+        let sampled = ImageUse::new(Access::GraphicsShaderRead, Layout::ShaderRead);
+        let transfer_src = ImageUse::new(Access::TransferRead, Layout::TransferSrc);
         gpu.submit_and_wait(|rec| {
-            for (src, (_, dst)) in sources.iter().zip(&targets) {
-                rec.copy_buffer(src, dst);
+            for (image, (_, dst)) in sources.iter().zip(&targets) {
+                // Draws may have sampled the image; it goes back to being sampled after.
+                rec.image_barrier(image, sampled, transfer_src);
+                rec.copy_image_to_buffer(image, dst);
+                rec.image_barrier(image, transfer_src, sampled);
             }
             rec.memory_barrier(Access::TransferWrite, Access::HostRead);
             Ok(())

@@ -1,12 +1,12 @@
 //! Host → device for an already prefiltered environment (e.g. one read from an on-disk cache):
 //! checks that the host data has the shape [`GpuPrefilter::run`](super::GpuPrefilter::run)
-//! produces, then builds the same [`GpuEnvironment`] — storage buffers kept for read-back, copied
-//! into sampled cube images.
+//! produces, then builds the same [`GpuEnvironment`]: host buffers copied into sampled cube
+//! images, freed once copied.
 
-use super::{copy_to_image, cube_bytes, GpuEnvironment};
+use super::{copy_to_image, cube_bytes, cube_image_usage, GpuEnvironment};
 use crate::environment::image::{CubeImage, PrefilteredEnvironment};
 use crate::environment::params::{MAX_FACE_SIZE, MAX_LAYERS, MIN_LAYER_FACE};
-use crate::gpu::{Buffer, BufferDesc, BufferUsage, GpuContext, ImageDesc, ImageUsage};
+use crate::gpu::{Buffer, BufferDesc, BufferUsage, GpuContext, ImageDesc};
 use crate::{Error, Result};
 
 impl GpuEnvironment {
@@ -25,7 +25,7 @@ impl GpuEnvironment {
             env.irradiance.face_size,
             storage_buffer(gpu, "irradiance", &env.irradiance)?,
         );
-        let sampled = ImageUsage::SAMPLED | ImageUsage::TRANSFER_DST;
+        let sampled = cube_image_usage();
         let layers = env
             .layers
             .iter()
@@ -46,8 +46,6 @@ impl GpuEnvironment {
             betas: env.betas.clone(),
             layers,
             irradiance,
-            layer_buffers,
-            irradiance_buffer,
         })
     }
 }
