@@ -7,9 +7,9 @@
 #ifndef LACQUER_SHADE_GLSL
 #define LACQUER_SHADE_GLSL
 
-// view_blur: (β_normal, β_grazing, p) of SPEC §4's β(nv), per material.
-vec3 environment_light(LacquerParams p, vec3 view_blur, vec3 n, vec3 v) {
-    vec2 nv2 = dot_compensated(n, v);
+// view_blur: (β_normal, β_grazing, p) of SPEC §4's β(nv), per material; nv2 = dot_compensated(n, v)
+// and f_diff = view_dependent_diffuse(p, nv2), shared with the lights.
+vec3 environment_light(LacquerParams p, vec3 view_blur, vec3 n, vec3 v, vec2 nv2, vec3 f_diff) {
     float nv = nv2.x + nv2.y;
     if (nv <= 0.0) {
         return vec3(0.0);
@@ -19,7 +19,7 @@ vec3 environment_light(LacquerParams p, vec3 view_blur, vec3 n, vec3 v) {
     vec3 specular = fresnel_table(angle_deg_of_cos(nv), p.fresnel_first, p.fresnel_count)
         * prefiltered_radiance(r, beta);
     vec3 irradiance = textureLod(env_irradiance, n, 0.0).rgb;
-    return specular + view_dependent_diffuse(p, nv2) * irradiance;
+    return specular + f_diff * irradiance;
 }
 
 // `position` and `interpolated_normal` as the rasteriser interpolated them at a pixel centre.
@@ -53,7 +53,7 @@ vec3 lacquer_radiance(LacquerParams p, vec3 view_blur, vec3 position, vec3 inter
         radiance += lacquer_brdf_view(p, n, v, l, nv2, f_diff) * irradiance * nl;
     }
     if (frame.environment.x != 0) {
-        radiance += environment_light(p, view_blur, n, v);
+        radiance += environment_light(p, view_blur, n, v, nv2, f_diff);
     }
     return radiance;
 }
