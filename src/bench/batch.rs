@@ -1,6 +1,7 @@
 //! Batch benchmark: a sweep of `batch_jobs` jobs (the bowl scene of the render benchmark, orbiting
 //! camera) rendered to PNG by the library's batch runner, images per second of the whole run,
-//! against the ceiling 1 / (GPU time of one image's submit) measured in the same invocation.
+//! against the ceiling 1 / (GPU time of one image's submit) measured in the same invocation, a few
+//! images after each batch run.
 
 use serde::Serialize;
 
@@ -13,6 +14,9 @@ use crate::{Error, Result};
 
 /// The target: throughput ≥ 90 % of 1 / (GPU render time per image).
 pub const EFFICIENCY_LIMIT: f64 = 0.9;
+
+/// Timed single-image renders after each batch run.
+const GPU_SAMPLES_PER_RUN: usize = 3;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct BatchBench {
@@ -69,7 +73,12 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<BatchBench> {
         force: true,
         ..BatchOptions::new(scratch.0.join("out"))
     };
-    let (mut wall, mut rate) = (Vec::new(), Vec::new());
+    // The GPU time of one job's image (same scene, same renderer code path), measured between
+    // the batch runs, so that a change in machine load hits both figures (the machine is shared,
+    // and the two are divided).
+    let scene = super::render::bowl_scene(config.batch_size, 4, Background::Environment)?;
+    let mut renderer = SceneRenderer::new(gpu)?;
+    let (mut wall, mut rate, mut per_image) = (Vec::new(), Vec::new(), Vec::new());
     for run in 0..=config.runs {
         let start = std::time::Instant::now();
         let summary = run_batch(gpu, &plan, &options)?;
@@ -81,26 +90,22 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<BatchBench> {
                 "every benchmark job must render; see the errors above",
             ));
         }
+        for _ in 0..GPU_SAMPLES_PER_RUN {
+            let (_, timings) = renderer.render_with(
+                gpu,
+                &scene,
+                DrawOptions {
+                    timed: true,
+                    ..DrawOptions::default()
+                },
+            )?;
+            if let (true, Some(t)) = (run > 0, timings) {
+                per_image.push(t.total);
+            }
+        }
         if run > 0 {
             wall.push(seconds);
             rate.push(jobs as f64 / seconds);
-        }
-    }
-    // The GPU time of one job's image, same scene, same renderer code path.
-    let scene = super::render::bowl_scene(config.batch_size, 4, Background::Environment)?;
-    let mut renderer = SceneRenderer::new(gpu)?;
-    let mut per_image = Vec::new();
-    for run in 0..=config.runs {
-        let (_, timings) = renderer.render_with(
-            gpu,
-            &scene,
-            DrawOptions {
-                timed: true,
-                ..DrawOptions::default()
-            },
-        )?;
-        if let (true, Some(t)) = (run > 0, timings) {
-            per_image.push(t.total);
         }
     }
     let gpu_per_image = Stat::of(per_image);
