@@ -825,6 +825,21 @@ fn validate(gpu: &GpuContext, scene: &DrawScene<'_>, settings: &RenderSettings) 
     for light in scene.lights {
         light.validate()?;
     }
+    let knots: usize = scene
+        .objects
+        .iter()
+        .map(|o| o.fresnel.angles_deg().len())
+        .sum();
+    if knots > MAX_DRAW_KNOTS {
+        return Err(Error::invalid(
+            "Fresnel knots",
+            knots,
+            format!(
+                "at most {MAX_DRAW_KNOTS} Fresnel table knots per draw, all objects together; \
+                 use coarser tables or render fewer objects at once"
+            ),
+        ));
+    }
     for object in scene.objects {
         object.mesh.validate()?;
     }
