@@ -215,3 +215,67 @@ fn deferred_background_is_the_forward_background() {
     assert!(deferred.pixels.iter().all(|p| p[3] == 1.0));
     assert_no_validation_messages(&gpu);
 }
+
+/// The shading pass has two Fresnel lookups: without a search when every table's knots lie on a
+/// power-of-two grid (the built-in tables: a knot per degree), and the general one with its
+/// check and binary search. The same curve given with an extra knot at 0.5° (off any grid, its
+/// value the linear interpolation there) must render the same image to rounding: 1e-5 relative,
+/// where the two lookups differ only in which pair of knots the interpolation starts from.
+#[test]
+fn fresnel_lookup_without_search_matches_the_general_one() {
+    let gpu = validated_gpu();
+    let material = LacquerMaterial::preset("smooth-black").unwrap();
+    let brdf = material.brdf_params().unwrap();
+    let on_grid = material.fresnel_table().unwrap();
+    let mut angles = on_grid.angles_deg().to_vec();
+    let mut rgb = on_grid.rgb().to_vec();
+    let mid = [0, 1, 2].map(|c| 0.5 * (rgb[0][c] + rgb[1][c]));
+    angles.insert(1, 0.5);
+    rgb.insert(1, mid);
+    let off_grid = shikki::model::FresnelTable::new(angles, rgb).unwrap();
+    let mesh = BuiltinMesh::Bowl.mesh();
+    let env = environment(&gpu);
+    let camera = camera();
+    let lights = shikki::raster::default_lights();
+    let settings = RenderSettings {
+        width: 160,
+        height: 120,
+        samples: 4,
+    };
+    let mut renderer = LacquerRenderer::new();
+    let mut render = |fresnel| {
+        let objects = [DrawObject {
+            mesh: &mesh,
+            brdf: &brdf,
+            fresnel,
+            view_blur: ViewBlur::of(&material),
+        }];
+        let scene = DrawScene {
+            objects: &objects,
+            camera: &camera,
+            lights: &lights,
+            environment: Some(&env),
+            background: Background::Transparent,
+        };
+        renderer.render(&gpu, &scene, &settings).unwrap()
+    };
+    let (grid, general) = (render(&on_grid), render(&off_grid));
+    let mut lit = 0;
+    for (i, (a, b)) in grid.pixels.iter().zip(&general.pixels).enumerate() {
+        assert_eq!(a[3], b[3], "coverage of pixel {i}");
+        for c in 0..3 {
+            let scale = a[c].abs().max(b[c].abs()).max(1e-4);
+            assert!(
+                (a[c] - b[c]).abs() <= 1e-5 * scale,
+                "pixel {i} channel {c}: grid lookup {} vs general {}",
+                a[c],
+                b[c]
+            );
+        }
+        if a[3] > 0.0 && a[0] > 1e-3 {
+            lit += 1;
+        }
+    }
+    assert!(lit > 1000, "the bowl is lit ({lit} pixels)");
+    assert_no_validation_messages(&gpu);
+}
