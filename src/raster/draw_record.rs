@@ -214,8 +214,10 @@ fn record_deferred(
     mark(rec, draw.stamps, 1);
     rec.begin_rendering(&RenderTargets {
         colors: &images.gbuffer,
-        // The normals are read only where the position marks a covered sample.
-        cleared_colors: 1,
+        // Both cleared: the shading pass compares every sample's normal (llvmpipe evaluates both
+        // sides of a branch), and a comparison with uncleared memory is a use of uninitialised
+        // values, which valgrind reports in the C API tests.
+        cleared_colors: 2,
         resolve: None,
         depth: Some(&targets.depth),
         // w = 0: no object covers the sample.
