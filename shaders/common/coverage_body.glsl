@@ -11,15 +11,7 @@
 
 #include "frame.glsl"
 
-#ifdef MULTISAMPLED
-layout(set = 0, binding = 5) uniform sampler2DMS gbuffer_position;
-layout(constant_id = 1) const int SAMPLE_COUNT = 4;
-#define FETCH(image, texel, s) texelFetch(image, texel, s)
-#else
-layout(set = 0, binding = 5) uniform sampler2D gbuffer_position;
-const int SAMPLE_COUNT = 1;
-#define FETCH(image, texel, s) texelFetch(image, texel, 0)
-#endif
+#include "gbuffer_samples.glsl"
 
 layout(location = 0) out vec4 out_radiance;
 

@@ -24,18 +24,7 @@ layout(std430, set = 0, binding = 4) readonly buffer Materials {
     vec4 object_material[];
 };
 
-const int MAX_SAMPLES = 4;
-#ifdef MULTISAMPLED
-layout(set = 0, binding = 5) uniform sampler2DMS gbuffer_position;
-layout(set = 0, binding = 6) uniform sampler2DMS gbuffer_normal;
-layout(constant_id = 1) const int SAMPLE_COUNT = MAX_SAMPLES;
-#define FETCH(image, texel, s) texelFetch(image, texel, s)
-#else
-layout(set = 0, binding = 5) uniform sampler2D gbuffer_position;
-layout(set = 0, binding = 6) uniform sampler2D gbuffer_normal;
-const int SAMPLE_COUNT = 1;
-#define FETCH(image, texel, s) texelFetch(image, texel, 0)
-#endif
+#include "gbuffer_samples.glsl"
 
 layout(location = 0) out vec4 out_radiance; // linear radiance, alpha = coverage
 

@@ -445,6 +445,17 @@ impl LacquerRenderer {
                 .layers
                 .len(),
         } as u32;
+        // Once per draw, for the pipeline choice, the knot buffer and the screen bounds.
+        let object_knots: Vec<Vec<[f32; 4]>> = scene
+            .objects
+            .iter()
+            .map(|o| shading::fresnel_knots(o.fresnel))
+            .collect();
+        let scene_radius = scene
+            .objects
+            .iter()
+            .map(|o| o.mesh.bounding_radius())
+            .fold(0.0, f64::max);
         let mesh_kind = match options.shading {
             MeshShading::Lacquer => PipelineKind::GBuffer,
             MeshShading::Trivial => PipelineKind::Trivial,
@@ -454,10 +465,7 @@ impl LacquerRenderer {
             PipelineKind::Coverage(with_background),
             PipelineKind::Shade(ShadeVariant {
                 environment_background: with_background,
-                fresnel_pow2_grid: scene
-                    .objects
-                    .iter()
-                    .all(|o| fresnel_on_pow2_grid(&shading::fresnel_knots(o.fresnel))),
+                fresnel_pow2_grid: object_knots.iter().all(|k| fresnel_on_pow2_grid(k)),
             }),
         );
         if deferred {
@@ -471,7 +479,8 @@ impl LacquerRenderer {
         if options.timed && self.timestamps.is_none() {
             self.timestamps = Some(gpu.create_timestamp_pool(TIMESTAMPS)?);
         }
-        let mut scene_frame = self.write_buffers(gpu, scene, settings)?;
+        let mut scene_frame =
+            self.write_buffers(gpu, scene, settings, (&object_knots, scene_radius))?;
         let environment = match scene.environment {
             Some(env) => env,
             None => self.black_environment.as_ref().ok_or_else(internal)?,
@@ -537,11 +546,6 @@ impl LacquerRenderer {
             Background::Transparent | Background::Environment => [0.0; 4],
             Background::Color([r, g, b]) => [r, g, b, 1.0],
         };
-        let scene_radius = scene
-            .objects
-            .iter()
-            .map(|o| o.mesh.bounding_radius())
-            .fold(0.0, f64::max);
         let shaded = screen_bounds(scene, settings, scene_radius);
         let mut timings: Option<DrawTimings> = stamps.map(|_| DrawTimings::default());
         let mut first_row = 0;
@@ -614,6 +618,7 @@ impl LacquerRenderer {
         gpu: &GpuContext,
         scene: &DrawScene<'_>,
         settings: &RenderSettings,
+        (object_knots, scene_radius): (&[Vec<[f32; 4]>], f64),
     ) -> Result<FrameUniforms> {
         let layer_betas = match scene.environment {
             Some(env) => env.betas.clone(),
@@ -623,11 +628,6 @@ impl LacquerRenderer {
                 .map(|e| e.betas.clone())
                 .unwrap_or_default(),
         };
-        let scene_radius = scene
-            .objects
-            .iter()
-            .map(|o| o.mesh.bounding_radius())
-            .fold(0.0, f64::max);
         let mut frame = FrameUniforms::new(
             scene.camera,
             settings.width,
@@ -642,9 +642,9 @@ impl LacquerRenderer {
         let buffers = &mut self.buffers;
         let mut knots: Vec<[f32; 4]> = Vec::new();
         let mut materials: Vec<[f32; 4]> = Vec::new();
-        for (i, object) in scene.objects.iter().enumerate() {
+        for (i, (object, object_knots)) in scene.objects.iter().zip(object_knots).enumerate() {
             let first_knot = knots.len();
-            knots.extend(shading::fresnel_knots(object.fresnel));
+            knots.extend_from_slice(object_knots);
             materials.extend(shading::object_material_vec4s(
                 object.brdf,
                 object.fresnel,
