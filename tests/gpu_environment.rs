@@ -11,7 +11,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 use shikki::environment::cube::{texel_direction, world_to_environment};
 use shikki::environment::definition::{irradiance_definition, prefiltered_radiance_definition};
-use shikki::environment::gpu::{GpuEnvironment, GpuPrefilter};
+use shikki::environment::gpu::{default_params, largest_face_size, GpuEnvironment, GpuPrefilter};
 use shikki::environment::params::ViewBlur;
 use shikki::environment::{oracle, CubeImage, Equirect, PrefilterParams};
 use shikki::model::brdf::view_dependent_diffuse;
@@ -395,6 +395,37 @@ fn rough_lacquer_reflects_sharply_only_at_grazing_angles() {
         (0.5..2.0).contains(&ratio),
         "smooth grazing/face-on contrast {ratio}"
     );
+    assert_no_validation_messages(&gpu);
+}
+
+/// A face whose cube exceeds the device's buffer limits is refused up front with the largest face
+/// that fits (Vulkan would leave it undefined: on lavapipe face 2048 needs 384 MiB against a
+/// 128 MiB maxStorageBufferRange), and default face sizes are clamped to that face.
+#[test]
+fn a_face_beyond_the_device_limits_is_refused_and_defaults_are_clamped() {
+    let gpu = validated_gpu();
+    let largest = largest_face_size(gpu.info());
+    assert!(
+        largest.is_power_of_two() && largest >= 16,
+        "largest face {largest}"
+    );
+    // An 8K source asks for face 2048 by default; clamped, it never exceeds the device.
+    assert_eq!(default_params(&gpu, 8192).face_size, largest.min(2048));
+    assert_eq!(default_params(&gpu, 1024).face_size, 256);
+    if largest < shikki::environment::params::MAX_FACE_SIZE {
+        let mut params = small_params(16);
+        params.face_size = 2 * largest;
+        let err = GpuPrefilter::new(&gpu)
+            .unwrap()
+            .run(&gpu, &synthetic_environment(64, 32), &params, 1.0, 0.0)
+            .err()
+            .expect("a face beyond the device's limits must be refused");
+        let text = err.to_string();
+        assert!(
+            text.contains("face size") && text.contains(&format!("--face-size {largest}")),
+            "{text}"
+        );
+    }
     assert_no_validation_messages(&gpu);
 }
 

@@ -7,7 +7,7 @@ use super::directions;
 use super::scene_cmd;
 use crate::compute::BrdfEvaluator;
 use crate::environment::disk_cache::{prefilter_cached, EnvironmentDiskCache};
-use crate::environment::gpu::{GpuEnvironment, GpuPrefilter};
+use crate::environment::gpu::{default_params, GpuEnvironment, GpuPrefilter};
 use crate::environment::load::load_environment;
 use crate::environment::params::ViewBlur;
 use crate::environment::PrefilterParams;
@@ -184,7 +184,7 @@ fn prepare_environment(gpu: &GpuContext, args: &EnvironmentArgs) -> Result<Optio
     }
     let loaded = load_environment(&args.env)?;
     warn_replaced(&loaded.source, loaded.replaced_pixels);
-    let params = PrefilterParams::for_source_width(loaded.image.width);
+    let params = default_params(gpu, loaded.image.width);
     let cache = EnvironmentDiskCache::beside_pipeline_cache(gpu.pipeline_cache_path());
     let env = prefilter_cached(
         gpu,
@@ -223,6 +223,9 @@ fn prefilter(args: PrefilterArgs) -> Result<()> {
         message: format!("cannot create the output directory: {e}"),
     })?;
     let gpu = super::open_gpu()?;
+    if args.face_size.is_none() {
+        params.face_size = default_params(&gpu, loaded.image.width).face_size;
+    }
     let env = GpuPrefilter::new(&gpu)?.run(
         &gpu,
         &loaded.image,
@@ -304,6 +307,7 @@ fn info() -> Result<()> {
          max compute threads:  {}\n\
          max storage buffer:   {} bytes\n\
          max uniform buffer:   {} bytes\n\
+         max texel buffer:     {} texels\n\
          MSAA sample counts:   {:?}\n\
          timestamps:           {} (period {} ns)\n",
         i.name,
@@ -321,6 +325,7 @@ fn info() -> Result<()> {
         i.max_compute_workgroup_invocations,
         i.max_storage_buffer_range,
         i.max_uniform_buffer_range,
+        i.max_texel_buffer_elements,
         i.framebuffer_color_sample_counts,
         if i.timestamp_compute_and_graphics {
             "yes"

@@ -3,10 +3,12 @@
 //! the CPU twin (`oracle.rs`) exists for tests and benchmarks only.
 
 use super::image::{CubeImage, Equirect, PrefilteredEnvironment};
-use super::params::{equirect_supersample, PrefilterParams, LOBE_CUTOFF};
+use super::params::{
+    equirect_supersample, PrefilterParams, LOBE_CUTOFF, MAX_FACE_SIZE, MIN_LAYER_FACE,
+};
 use crate::gpu::{
-    Access, Binding, BindingKind, Buffer, BufferDesc, BufferUsage, ComputePipeline, DescriptorSet,
-    GpuContext, Image, ImageDesc, ImageUsage, ImageUse, Layout, Recorder, Resource,
+    Access, AdapterInfo, Binding, BindingKind, Buffer, BufferDesc, BufferUsage, ComputePipeline,
+    DescriptorSet, GpuContext, Image, ImageDesc, ImageUsage, ImageUse, Layout, Recorder, Resource,
 };
 use crate::{Error, Result};
 
@@ -15,8 +17,9 @@ mod upload;
 /// Threads per workgroup side; must equal local_size_x/y in the prefilter shaders.
 const WORKGROUP: u32 = 8;
 
-const IO_BINDINGS: [Binding; 2] = [
-    Binding::new(0, BindingKind::StorageBuffer),
+/// Steps that gather from a cube read it as a texel buffer (see `BindingKind::UniformTexelBuffer`).
+const TEXEL_IO_BINDINGS: [Binding; 2] = [
+    Binding::new(0, BindingKind::UniformTexelBuffer),
     Binding::new(1, BindingKind::StorageBuffer),
 ];
 
@@ -69,33 +72,33 @@ impl GpuPrefilter {
                 gpu.create_compute_pipeline(
                     "equirect_to_cube_f64.comp",
                     EQUIRECT_TO_CUBE_F64_COMP,
-                    &IO_BINDINGS,
+                    &TEXEL_IO_BINDINGS,
                     28,
                 )?
             } else {
                 gpu.create_compute_pipeline(
                     "equirect_to_cube.comp",
                     EQUIRECT_TO_CUBE_COMP,
-                    &IO_BINDINGS,
+                    &TEXEL_IO_BINDINGS,
                     28,
                 )?
             },
             downsample: gpu.create_compute_pipeline(
                 "downsample.comp",
                 DOWNSAMPLE_COMP,
-                &IO_BINDINGS,
+                &TEXEL_IO_BINDINGS,
                 4,
             )?,
             blur_layer: gpu.create_compute_pipeline(
                 "prefilter_layers.comp",
                 PREFILTER_LAYERS_COMP,
-                &IO_BINDINGS,
+                &TEXEL_IO_BINDINGS,
                 12,
             )?,
             irradiance: gpu.create_compute_pipeline(
                 "irradiance.comp",
                 IRRADIANCE_COMP,
-                &IO_BINDINGS,
+                &TEXEL_IO_BINDINGS,
                 4,
             )?,
         })
@@ -125,6 +128,7 @@ impl GpuPrefilter {
     ) -> Result<(GpuEnvironment, PrefilterTimings)> {
         params.validate()?;
         check_source(source, intensity, rotation_deg)?;
+        check_device_limits(gpu.info(), source, params)?;
         let plan = params.plan();
         let mip_faces = params.mip_faces();
 
@@ -136,11 +140,11 @@ impl GpuPrefilter {
         let mut source_buf = gpu.create_buffer(BufferDesc::upload(
             "environment equirect",
             (pixels.len() * 16) as u64,
-            BufferUsage::STORAGE,
+            BufferUsage::UNIFORM_TEXEL,
         ))?;
         source_buf.write(&pixels)?;
 
-        let storage = BufferUsage::STORAGE | BufferUsage::TRANSFER_SRC;
+        let storage = BufferUsage::STORAGE | BufferUsage::TRANSFER_SRC | BufferUsage::UNIFORM_TEXEL;
         let mips: Vec<Buffer> = mip_faces
             .iter()
             .map(|&m| gpu.create_buffer(BufferDesc::device_local("mip", cube_bytes(m), storage)))
@@ -173,7 +177,7 @@ impl GpuPrefilter {
             |pipeline: &ComputePipeline, src: &Buffer, dst: &Buffer| -> Result<DescriptorSet> {
                 Ok(gpu.create_descriptor_set(
                     pipeline.layout(),
-                    &[(0, Resource::Buffer(src)), (1, Resource::Buffer(dst))],
+                    &[(0, Resource::TexelBuffer(src)), (1, Resource::Buffer(dst))],
                 )?)
             };
         let to_cube_set = set(&self.equirect_to_cube, &source_buf, &mips[0])?;
@@ -297,6 +301,68 @@ fn copy_to_image(rec: &mut Recorder<'_>, buffer: &Buffer, image: &Image) {
         ImageUse::new(Access::TransferWrite, Layout::TransferDst),
         ImageUse::new(Access::GraphicsShaderRead, Layout::ShaderRead),
     );
+}
+
+/// Whether the device can hold a cube of face `n` in the prefilter's buffers: each cube is written
+/// as one storage buffer and read as one RGBA32F texel buffer.
+fn cube_fits(info: &AdapterInfo, n: u32) -> bool {
+    cube_bytes(n) <= u64::from(info.max_storage_buffer_range)
+        && 6 * u64::from(n) * u64::from(n) <= u64::from(info.max_texel_buffer_elements)
+        && n <= info.max_image_dimension_cube
+}
+
+/// The largest layer-0 face size (a power of two) this device can prefilter: 1024 on lavapipe,
+/// whose storage buffers hold at most 128 MiB. Default face sizes are clamped to it.
+pub fn largest_face_size(info: &AdapterInfo) -> u32 {
+    let mut n = MAX_FACE_SIZE;
+    while n > MIN_LAYER_FACE && !cube_fits(info, n) {
+        n /= 2;
+    }
+    n
+}
+
+/// [`PrefilterParams::for_source_width`] with the face size clamped to [`largest_face_size`]: an
+/// 8K source (default face 2048) prefilters at face 1024 on lavapipe instead of failing.
+pub fn default_params(gpu: &GpuContext, source_width: u32) -> PrefilterParams {
+    let mut params = PrefilterParams::for_source_width(source_width);
+    params.face_size = params.face_size.min(largest_face_size(gpu.info()));
+    params
+}
+
+/// Refuses, before allocating, a prefilter whose buffers exceed the device's limits (which
+/// Vulkan leaves undefined rather than failing).
+fn check_device_limits(
+    info: &AdapterInfo,
+    source: &Equirect,
+    params: &PrefilterParams,
+) -> Result<()> {
+    if !cube_fits(info, params.face_size) {
+        return Err(Error::invalid(
+            "face size",
+            params.face_size,
+            format!(
+                "{} holds at most face {} in one buffer (maxStorageBufferRange {} bytes, \
+                 maxTexelBufferElements {}); use --face-size {} or smaller",
+                info.name,
+                largest_face_size(info),
+                info.max_storage_buffer_range,
+                info.max_texel_buffer_elements,
+                largest_face_size(info)
+            ),
+        ));
+    }
+    let pixels = u64::from(source.width) * u64::from(source.height);
+    if pixels > u64::from(info.max_texel_buffer_elements) {
+        return Err(Error::invalid(
+            "environment size",
+            format!("{}x{}", source.width, source.height),
+            format!(
+                "{} reads at most {} source pixels (maxTexelBufferElements); downscale the image",
+                info.name, info.max_texel_buffer_elements
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn check_source(source: &Equirect, intensity: f64, rotation_deg: f64) -> Result<()> {

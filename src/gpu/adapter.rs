@@ -18,6 +18,7 @@ pub struct AdapterInfo {
     pub max_compute_workgroup_invocations: u32,
     pub max_storage_buffer_range: u32,
     pub max_uniform_buffer_range: u32,
+    pub max_texel_buffer_elements: u32,
     pub framebuffer_color_sample_counts: Vec<u32>,
     pub timestamp_period_ns: f32,
     pub timestamp_compute_and_graphics: bool,
@@ -152,6 +153,7 @@ fn describe(instance: &ash::Instance, device: vk::PhysicalDevice) -> AdapterInfo
         max_compute_workgroup_invocations: limits.max_compute_work_group_invocations,
         max_storage_buffer_range: limits.max_storage_buffer_range,
         max_uniform_buffer_range: limits.max_uniform_buffer_range,
+        max_texel_buffer_elements: limits.max_texel_buffer_elements,
         framebuffer_color_sample_counts: super::conv::sample_counts(
             limits.framebuffer_color_sample_counts & limits.framebuffer_depth_sample_counts,
         ),

@@ -18,6 +18,8 @@ impl BufferUsage {
     pub const INDEX: Self = Self(vk::BufferUsageFlags::INDEX_BUFFER);
     pub const UNIFORM: Self = Self(vk::BufferUsageFlags::UNIFORM_BUFFER);
     pub const STORAGE: Self = Self(vk::BufferUsageFlags::STORAGE_BUFFER);
+    /// Read in shaders as a `samplerBuffer` of RGBA32F texels (`Resource::TexelBuffer`).
+    pub const UNIFORM_TEXEL: Self = Self(vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER);
     pub const TRANSFER_SRC: Self = Self(vk::BufferUsageFlags::TRANSFER_SRC);
     pub const TRANSFER_DST: Self = Self(vk::BufferUsageFlags::TRANSFER_DST);
 }

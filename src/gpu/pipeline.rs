@@ -18,6 +18,9 @@ pub enum BindingKind {
     StorageBuffer,
     SampledImage,
     StorageImage,
+    /// A `samplerBuffer` of RGBA32F texels: on llvmpipe a `texelFetch` gathers a whole texel per
+    /// lane, where an SSBO load runs a scalar loop over the lanes for every component.
+    UniformTexelBuffer,
 }
 
 /// One binding of set 0 (an array of `count` descriptors when count > 1).
@@ -48,6 +51,7 @@ fn descriptor_type(kind: BindingKind) -> vk::DescriptorType {
         BindingKind::StorageBuffer => vk::DescriptorType::STORAGE_BUFFER,
         BindingKind::SampledImage => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
         BindingKind::StorageImage => vk::DescriptorType::STORAGE_IMAGE,
+        BindingKind::UniformTexelBuffer => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
     }
 }
 
@@ -411,12 +415,16 @@ pub enum Resource<'a> {
     /// Every element of an array binding, in order; its length must equal the binding's count.
     SampledImages(Vec<&'a Image>, &'a Sampler),
     StorageImage(&'a Image),
+    /// The whole buffer as RGBA32F texels (created with `BufferUsage::UNIFORM_TEXEL`).
+    TexelBuffer(&'a Buffer),
 }
 
 /// Set 0 of a pipeline, filled in once.
 pub struct DescriptorSet {
     pub(crate) raw: vk::DescriptorSet,
     pool: vk::DescriptorPool,
+    /// Views of the texel buffers the set points at: they must outlive it.
+    buffer_views: Vec<vk::BufferView>,
     shared: Arc<DeviceShared>,
 }
 
@@ -443,6 +451,7 @@ impl DescriptorSet {
         let mut set = DescriptorSet {
             raw: vk::DescriptorSet::null(),
             pool,
+            buffer_views: Vec::new(),
             shared: Arc::clone(shared),
         };
         let alloc = vk::DescriptorSetAllocateInfo::default()
@@ -455,12 +464,27 @@ impl DescriptorSet {
         Ok(set)
     }
 
+    /// An RGBA32F view of the whole of `buffer`, owned by this set.
+    fn texel_view(&mut self, buffer: &Buffer) -> Result<vk::BufferView, GpuError> {
+        let info = vk::BufferViewCreateInfo::default()
+            .buffer(buffer.raw)
+            .format(vk::Format::R32G32B32A32_SFLOAT)
+            .offset(0)
+            .range(vk::WHOLE_SIZE);
+        // SAFETY: valid device; the buffer is live; the view is destroyed with the set.
+        let view = unsafe { self.shared.device.create_buffer_view(&info, None) }
+            .during("vkCreateBufferView")?;
+        self.buffer_views.push(view);
+        Ok(view)
+    }
+
     fn write(
-        &self,
+        &mut self,
         layout: &PipelineLayout,
         resources: &[(u32, Resource<'_>)],
     ) -> Result<(), GpuError> {
         let mut buffer_infos = Vec::new();
+        let mut texel_views = Vec::new();
         let mut image_infos: Vec<(u32, Vec<vk::DescriptorImageInfo>)> = Vec::new();
         let sampled = |image: &Image, sampler: &Sampler| vk::DescriptorImageInfo {
             sampler: sampler.raw,
@@ -492,6 +516,7 @@ impl DescriptorSet {
                         image_layout: vk::ImageLayout::GENERAL,
                     }],
                 )),
+                Resource::TexelBuffer(b) => texel_views.push((*index, self.texel_view(b)?)),
             }
         }
         let binding_of = |index: u32| -> Result<Binding, GpuError> {
@@ -514,6 +539,15 @@ impl DescriptorSet {
                     .dst_binding(*index)
                     .descriptor_type(descriptor_type(binding_of(*index)?.kind))
                     .buffer_info(std::slice::from_ref(info)),
+            );
+        }
+        for (index, view) in &texel_views {
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(self.raw)
+                    .dst_binding(*index)
+                    .descriptor_type(descriptor_type(binding_of(*index)?.kind))
+                    .texel_buffer_view(std::slice::from_ref(view)),
             );
         }
         for (index, infos) in &image_infos {
@@ -541,7 +575,12 @@ impl DescriptorSet {
 
 impl Drop for DescriptorSet {
     fn drop(&mut self) {
-        // SAFETY: destroying the pool frees its set; no pending work uses it.
-        unsafe { self.shared.device.destroy_descriptor_pool(self.pool, None) };
+        // SAFETY: destroying the pool frees its set; no pending work uses it or its views.
+        unsafe {
+            self.shared.device.destroy_descriptor_pool(self.pool, None);
+            for view in &self.buffer_views {
+                self.shared.device.destroy_buffer_view(*view, None);
+            }
+        }
     }
 }

@@ -13,10 +13,9 @@ use std::sync::Arc;
 use super::parse::cached_file_mesh;
 use super::{EnvironmentSpec, MeshSource, Scene};
 use crate::environment::disk_cache::{prefilter_cached, EnvironmentDiskCache};
-use crate::environment::gpu::{GpuEnvironment, GpuPrefilter};
+use crate::environment::gpu::{default_params, GpuEnvironment, GpuPrefilter};
 use crate::environment::load::load_environment;
 use crate::environment::params::ViewBlur;
-use crate::environment::PrefilterParams;
 use crate::gpu::GpuContext;
 use crate::model::{BrdfParams, FresnelTable};
 use crate::output::HdrImage;
@@ -221,7 +220,7 @@ impl SceneRenderer {
             return Ok(Some(k));
         }
         let loaded = load_environment(source)?;
-        let params = PrefilterParams::for_source_width(loaded.image.width);
+        let params = default_params(gpu, loaded.image.width);
         if loaded.replaced_pixels > 0 && !self.warned.contains(source) {
             eprintln!(
                 "warning: {source}: {} pixel value(s) were NaN, infinite or negative and were \
