@@ -18,10 +18,9 @@
 // is the interval, with no check or search (llvmpipe runs a search loop's body at least once).
 layout(constant_id = 3) const bool FRESNEL_POW2_GRID = false;
 
-// Knots of the Fresnel table: (angle_deg, r, g, b), angles strictly increasing from 0 to 90.
-layout(std430, set = FRESNEL_SET, binding = FRESNEL_BINDING) readonly buffer FresnelTable {
-    vec4 fresnel_knots[];
-};
+// Knots of the Fresnel table: (angle_deg, r, g, b), angles strictly increasing from 0 to 90. A
+// texel buffer: on llvmpipe a per-lane texel fetch costs far less than a per-lane SSBO load.
+layout(set = FRESNEL_SET, binding = FRESNEL_BINDING) uniform samplerBuffer fresnel_knots;
 
 struct LacquerParams {
     float beckmann_m;
@@ -84,7 +83,7 @@ float view_factor(LacquerParams p, vec2 nv) {
     return f;
 }
 
-// F(θ): linear interpolation in the table of `count` knots from fresnel_knots[first]; θ in
+// F(θ): linear interpolation in the table of `count` knots from texelFetch(fresnel_knots, first); θ in
 // degrees, clamped to [0, 90].
 vec3 fresnel_table(float theta_deg, int first, int count) {
     float theta = clamp(theta_deg, 0.0, 90.0);
@@ -94,11 +93,11 @@ vec3 fresnel_table(float theta_deg, int first, int count) {
     // to the binary search, so the result is the search's exactly. Why: the search is a divergent
     // loop of dependent buffer reads, run four times per fragment.
     int last = count - 2;
-    float step = fresnel_knots[first + 1].x - fresnel_knots[first + 0].x;
+    float step = texelFetch(fresnel_knots, first + 1).x - texelFetch(fresnel_knots, first + 0).x;
     int lo = clamp(int(theta / step), 0, last);
     bool found = FRESNEL_POW2_GRID
-        || (fresnel_knots[first + lo].x <= theta
-            && (lo == last || fresnel_knots[first + lo + 1].x > theta));
+        || (texelFetch(fresnel_knots, first + lo).x <= theta
+            && (lo == last || texelFetch(fresnel_knots, first + lo + 1).x > theta));
     int hi = lo + 1;
     if (!found) {
         // Binary search for the last knot with angle <= theta (log2(91) ≈ 7 steps).
@@ -106,15 +105,15 @@ vec3 fresnel_table(float theta_deg, int first, int count) {
         hi = count - 1;
         while (hi - lo > 1) {
             int mid = (lo + hi) / 2;
-            if (fresnel_knots[first + mid].x <= theta) {
+            if (texelFetch(fresnel_knots, first + mid).x <= theta) {
                 lo = mid;
             } else {
                 hi = mid;
             }
         }
     }
-    vec4 k0 = fresnel_knots[first + lo];
-    vec4 k1 = fresnel_knots[first + hi];
+    vec4 k0 = texelFetch(fresnel_knots, first + lo);
+    vec4 k1 = texelFetch(fresnel_knots, first + hi);
     float span = k1.x - k0.x;
     float t = span > 0.0 ? clamp((theta - k0.x) / span, 0.0, 1.0) : 0.0;
     return mix(k0.yzw, k1.yzw, t);

@@ -20,19 +20,17 @@
 
 // Per object, four vec4s: (m, a, b, g(r)), (k_d, knot count), (a_lo, b_lo, first knot, 0),
 // (β_normal, β_grazing, p, 0). Packed by shading::ObjectMaterial.
-layout(std430, set = 0, binding = 4) readonly buffer Materials {
-    vec4 object_material[];
-};
+layout(set = 0, binding = 4) uniform samplerBuffer object_material;
 
 #include "gbuffer_samples.glsl"
 
 layout(location = 0) out vec4 out_radiance; // linear radiance, alpha = coverage
 
 vec3 shade_object(int object, vec3 position, vec3 interpolated_normal) {
-    vec4 material = object_material[4 * object + 0];
-    vec4 albedo_count = object_material[4 * object + 1];
-    vec4 material_lo = object_material[4 * object + 2];
-    vec4 view_blur = object_material[4 * object + 3];
+    vec4 material = texelFetch(object_material, 4 * object + 0);
+    vec4 albedo_count = texelFetch(object_material, 4 * object + 1);
+    vec4 material_lo = texelFetch(object_material, 4 * object + 2);
+    vec4 view_blur = texelFetch(object_material, 4 * object + 3);
     LacquerParams p;
     p.beckmann_m = material.x;
     p.diffuse_a = material.y;

@@ -35,7 +35,7 @@ impl BrdfEvaluator {
     pub fn new(gpu: &GpuContext) -> Result<Self> {
         let bindings = [
             Binding::new(0, BindingKind::UniformBuffer),
-            Binding::new(1, BindingKind::StorageBuffer),
+            Binding::new(1, BindingKind::UniformTexelBuffer),
             Binding::new(2, BindingKind::StorageBuffer),
             Binding::new(3, BindingKind::StorageBuffer),
         ];
@@ -102,7 +102,7 @@ impl BrdfEvaluator {
         let mut knots_buf = gpu.create_buffer(BufferDesc::upload(
             "brdf_eval fresnel",
             (knots.len() * 16) as u64,
-            BufferUsage::STORAGE,
+            BufferUsage::UNIFORM_TEXEL,
         ))?;
         knots_buf.write(&knots)?;
         let mut dirs_buf = gpu.create_buffer(BufferDesc::upload(
@@ -117,7 +117,7 @@ impl BrdfEvaluator {
             self.pipeline.layout(),
             &[
                 (0, Resource::Buffer(&params_buf)),
-                (1, Resource::Buffer(&knots_buf)),
+                (1, Resource::TexelBuffer(&knots_buf)),
                 (2, Resource::Buffer(&dirs_buf)),
                 (3, Resource::Buffer(&values_buf)),
             ],

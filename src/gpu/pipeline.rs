@@ -466,6 +466,15 @@ impl DescriptorSet {
 
     /// An RGBA32F view of the whole of `buffer`, owned by this set.
     fn texel_view(&mut self, buffer: &Buffer) -> Result<vk::BufferView, GpuError> {
+        let texels = buffer.size() / 16;
+        let limit = self.shared.info.max_texel_buffer_elements;
+        if texels > u64::from(limit) {
+            return Err(GpuError::Limit {
+                what: "RGBA32F texels in one texel buffer (maxTexelBufferElements)",
+                value: texels,
+                limit: u64::from(limit),
+            });
+        }
         let info = vk::BufferViewCreateInfo::default()
             .buffer(buffer.raw)
             .format(vk::Format::R32G32B32A32_SFLOAT)

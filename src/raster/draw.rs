@@ -103,10 +103,10 @@ const GRAPHICS_BINDINGS: [Binding; 3] = [
 /// G-buffer.
 const SHADE_BINDINGS: [Binding; 7] = [
     Binding::new(0, BindingKind::UniformBuffer),
-    Binding::new(1, BindingKind::StorageBuffer),
+    Binding::new(1, BindingKind::UniformTexelBuffer),
     Binding::array(2, BindingKind::SampledImage, MAX_ENV_LAYERS as u32),
     Binding::new(3, BindingKind::SampledImage),
-    Binding::new(4, BindingKind::StorageBuffer),
+    Binding::new(4, BindingKind::UniformTexelBuffer),
     Binding::new(5, BindingKind::SampledImage),
     Binding::new(6, BindingKind::SampledImage),
 ];
@@ -683,7 +683,7 @@ impl LacquerRenderer {
             "fresnel knots",
             &knots,
             INITIAL_KNOTS,
-            BufferUsage::STORAGE,
+            BufferUsage::UNIFORM_TEXEL,
         )?;
         write_growing(
             gpu,
@@ -691,7 +691,7 @@ impl LacquerRenderer {
             "object materials",
             &materials,
             4 * INITIAL_OBJECTS,
-            BufferUsage::STORAGE,
+            BufferUsage::UNIFORM_TEXEL,
         )?;
         Ok(frame)
     }
@@ -745,13 +745,13 @@ fn shade_descriptor_set(
         pipeline.layout(),
         &[
             (0, Resource::Buffer(frame)),
-            (1, Resource::Buffer(knots)),
+            (1, Resource::TexelBuffer(knots)),
             (
                 2,
                 Resource::SampledImages(layer_images(environment), sampler),
             ),
             (3, Resource::SampledImage(&environment.irradiance, sampler)),
-            (4, Resource::Buffer(materials)),
+            (4, Resource::TexelBuffer(materials)),
             (5, Resource::SampledImage(position, sampler)),
             (6, Resource::SampledImage(normal, sampler)),
         ],
