@@ -151,7 +151,9 @@ void main() {
             uint row = cube_index(f, 0u, uint(j), n);
             vec3 row_base = axis + texel_coord(uint(j), n) * t_dir;
             for (int i = span.x; i <= span.y; ++i) {
-                vec3 p = row_base + texel_coord(uint(i), n) * s_dir;
+                // texel_coord(i, n) without its division: n is a power of two, so h = 2/n and
+                // (i + ½)·h are exact and this is the same float.
+                vec3 p = row_base + ((float(i) + 0.5) * h - 1.0) * s_dir;
                 float inv_len = inversesqrt(dot(p, p));
                 vec3 diff = d - p * inv_len;
                 float q = 0.5 * dot(diff, diff);
