@@ -301,8 +301,9 @@ pub unsafe extern "C" fn shikki_render_rgba8(
             exposure_ev: scene.exposure_ev,
             tone_curve: scene.tone_curve,
         };
+        let encoder = shikki::output::tonemap::Srgb8Encoder::new(&settings);
         copy_pixels(out, &image, |pixel| {
-            shikki::output::png::straight_srgb8(pixel, &settings)
+            shikki::output::png::straight_srgb8_with(pixel, &encoder)
         });
         Ok(())
     })

@@ -10,7 +10,7 @@ use image::{ExtendedColorType, ImageEncoder, ImageFormat};
 use rayon::prelude::*;
 
 use super::image::HdrImage;
-use super::tonemap::{to_srgb8, unit_to_u8, PngSettings};
+use super::tonemap::{unit_to_u8, PngSettings, Srgb8Encoder};
 use crate::{Error, Result};
 
 /// zlib level of the PNG encoder (1 fastest … 9 smallest).
@@ -26,6 +26,7 @@ pub fn encode_png(image: &HdrImage, settings: &PngSettings) -> Result<Vec<u8>> {
     image.validate_for_encoding()?;
     settings.validate()?;
     // Rows in parallel (the display transform is per pixel, so the bytes are the same).
+    let encoder = Srgb8Encoder::new(settings);
     let row_bytes = image.width as usize * 4;
     let mut rgba8 = vec![0u8; image.pixels.len() * 4];
     rgba8
@@ -33,7 +34,7 @@ pub fn encode_png(image: &HdrImage, settings: &PngSettings) -> Result<Vec<u8>> {
         .zip(image.pixels.par_chunks((image.width as usize).max(1)))
         .for_each(|(out, row)| {
             for (texel, &pixel) in out.chunks_exact_mut(4).zip(row) {
-                texel.copy_from_slice(&straight_srgb8(pixel, settings));
+                texel.copy_from_slice(&straight_srgb8_with(pixel, &encoder));
             }
         });
 
@@ -62,15 +63,20 @@ pub fn encode_png(image: &HdrImage, settings: &PngSettings) -> Result<Vec<u8>> {
 /// One pixel as PNG stores it: colour un-premultiplied by coverage, then exposure → tone curve →
 /// sRGB → 8 bits; alpha rounded to 8 bits. Also the C API's RGBA8 render.
 pub fn straight_srgb8(pixel: [f32; 4], settings: &PngSettings) -> [u8; 4] {
+    straight_srgb8_with(pixel, &Srgb8Encoder::new(settings))
+}
+
+/// [`straight_srgb8`] with the encoder of its settings made once, for whole images.
+pub fn straight_srgb8_with(pixel: [f32; 4], encoder: &Srgb8Encoder) -> [u8; 4] {
     let [r, g, b, a] = pixel;
     let alpha = a.clamp(0.0, 1.0);
     // Premultiplied colour is radiance × coverage; dividing by coverage recovers the radiance of
     // the covered part, which is what a straight-alpha viewer composites.
     let unpremultiply = if alpha > 0.0 { 1.0 / alpha } else { 1.0 };
     [
-        to_srgb8(r * unpremultiply, settings),
-        to_srgb8(g * unpremultiply, settings),
-        to_srgb8(b * unpremultiply, settings),
+        encoder.encode(r * unpremultiply),
+        encoder.encode(g * unpremultiply),
+        encoder.encode(b * unpremultiply),
         unit_to_u8(alpha),
     ]
 }

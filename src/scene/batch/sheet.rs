@@ -9,7 +9,7 @@ use std::sync::OnceLock;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
-use crate::output::tonemap::to_srgb8;
+use crate::output::tonemap::Srgb8Encoder;
 use crate::output::{HdrImage, PngSettings};
 use crate::{Error, Result};
 
@@ -36,6 +36,7 @@ impl Thumbnail {
     /// backdrop by coverage.
     pub fn from_hdr(image: &HdrImage, png: &PngSettings) -> Self {
         let (width, height, factor) = fit(image.width, image.height);
+        let encoder = Srgb8Encoder::new(png);
         let mut rgb = Vec::with_capacity((width * height) as usize);
         for ty in 0..height {
             for tx in 0..width {
@@ -58,7 +59,7 @@ impl Thumbnail {
                     } else {
                         0.0
                     };
-                    let shown = f32::from(to_srgb8(straight, png));
+                    let shown = f32::from(encoder.encode(straight));
                     (shown * alpha + f32::from(BACKDROP[c]) * (1.0 - alpha)).round() as u8
                 });
                 rgb.push(pixel);
