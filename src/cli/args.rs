@@ -149,7 +149,8 @@ pub struct PrefilterArgs {
     /// Output directory (created if missing) for layer_<k>.exr, irradiance.exr and preview.png.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
-    /// Face size of layer 0 (a power of two); default from the source width.
+    /// Face size of layer 0 (a power of two); default from the source width, clamped to the
+    /// largest face the device holds in one buffer.
     #[arg(long = "face-size")]
     pub face_size: Option<u32>,
     /// Number of layers K, including the sharp layer 0.
