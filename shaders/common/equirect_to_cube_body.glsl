@@ -2,15 +2,16 @@
 // sub-samples (the source pixel containing each), × intensity, the environment rotated about +Y.
 // CPU twin: environment::oracle::equirect_to_cube.
 //
-// Included by equirect_to_cube.comp (fp32) and equirect_to_cube_f64.comp (PRECISE_COORDINATES):
+// Included by equirect_to_cube.comp (fp32), equirect_to_cube_f64.comp (PRECISE_COORDINATES) and
+// equirect_to_cube_near.comp (PRECISE_COORDINATES, NEAR_PASS):
 // in fp32 the source position px ≈ u·W carries ~3e-5 px of rounding at W = 1024, so a sub-sample
 // near a pixel boundary can read the neighbouring pixel, which at a hard HDR edge (neighbours 100×
 // apart) is a visible error against the oracle. With shaderFloat64 the fp32 position decides only
 // where it is farther than its error bound from every pixel boundary (~99 % of sub-samples); the
 // rest are recomputed in double — direction, angles and px (GLSL has no double atan: the fp32
-// angle is refined by one Newton step with double sin/cos polynomials). lavapipe executes both
-// sides of every `if` (masked), but leaves a loop as soon as no lane is in it, so the double path
-// sits in a loop over the near sub-samples: one double evaluation per invocation, not S².
+// angle is refined by one Newton step with double sin/cos polynomials). Those texels are listed
+// and finished by a second dispatch, equirect_to_cube_near.comp (NEAR_PASS), whose lanes all have
+// work; see NearTexels below.
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
@@ -32,7 +33,18 @@ layout(push_constant) uniform Params {
 // RGBA32F texels read with texelFetch: on llvmpipe a per-lane texel-buffer fetch costs far less than
 // a per-lane SSBO load (measured: the irradiance pass 2.3× faster; BENCHMARKS.md).
 layout(set = 0, binding = 0) uniform samplerBuffer equirect;
-layout(std430, set = 0, binding = 1) writeonly buffer Cube { vec4 cube[]; };
+layout(std430, set = 0, binding = 1) buffer Cube { vec4 cube[]; };
+
+// Texels with sub-samples near a pixel edge, which equirect_to_cube_near.comp finishes in double
+// precision: header (count, then the near pass's indirect dispatch x, y, z), then texel indices.
+// Why a second pass: llvmpipe runs a loop's body once even when no lane enters it, so the double
+// path inline cost every 8-lane group its full price (~0.03 s of the step at face 512), where
+// only a few percent of texels need it.
+layout(std430, set = 0, binding = 2) buffer NearTexels {
+    uint near_header[4];
+    uint near_texels[];
+};
+const uint NEAR_GROUP_SIZE = 64u; // = local_size_x × local_size_y
 
 vec3 fetch(int x, int y) {
     int w = int(params.src_width);
@@ -144,6 +156,7 @@ ivec2 source_cell(int face, uint i, uint j, uint n, uint a, uint b, out bool nea
     return ivec2(cell);
 }
 
+#ifndef NEAR_PASS
 void main() {
     uvec3 id = gl_GlobalInvocationID;
     uint n = params.face_size;
@@ -163,16 +176,47 @@ void main() {
             sum += near ? vec3(0.0) : fetch(cell.x, cell.y);
         }
     }
+    uint index = cube_index(face, id.x, id.y, n);
 #ifdef PRECISE_COORDINATES
+    if (near_bits == 0u) {
+#endif
+        cube[index] = vec4(sum * (params.intensity / float(SUPERSAMPLE * SUPERSAMPLE)), 1.0);
+#ifdef PRECISE_COORDINATES
+    } else {
+        // The partial sum and the sub-samples still to add (exact in a float: < 2^16), for the
+        // near pass, which appends the rest in the same order and scales as above.
+        cube[index] = vec4(sum, float(near_bits));
+        uint slot = atomicAdd(near_header[0], 1u);
+        near_texels[slot] = index;
+        if (slot % NEAR_GROUP_SIZE == 0u) {
+            atomicAdd(near_header[1], 1u);
+        }
+    }
+#endif
+}
+#else
+// The near pass: one invocation per listed texel, every lane with work.
+void main() {
+    uint slot = gl_WorkGroupID.x * NEAR_GROUP_SIZE + gl_LocalInvocationIndex;
+    if (slot >= near_header[0]) {
+        return;
+    }
+    uint index = near_texels[slot];
+    uint n = params.face_size;
+    int face = int(index / (n * n));
+    uint j = (index / n) % n;
+    uint i = index % n;
+    vec4 partial = cube[index];
+    vec3 sum = partial.xyz;
+    uint near_bits = uint(partial.w);
     // At most S² ≤ 16 iterations.
     while (near_bits != 0u) {
         uint bit = uint(findLSB(near_bits));
         near_bits &= ~(1u << bit);
         ivec2 cell = ivec2(floor(source_position(
-            face, id.x, id.y, n, bit % SUPERSAMPLE, bit / SUPERSAMPLE)));
+            face, i, j, n, bit % SUPERSAMPLE, bit / SUPERSAMPLE)));
         sum += fetch(cell.x, cell.y);
     }
-#endif
-    cube[cube_index(face, id.x, id.y, n)] =
-        vec4(sum * (params.intensity / float(SUPERSAMPLE * SUPERSAMPLE)), 1.0);
+    cube[index] = vec4(sum * (params.intensity / float(SUPERSAMPLE * SUPERSAMPLE)), 1.0);
 }
+#endif

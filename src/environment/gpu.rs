@@ -23,9 +23,25 @@ const TEXEL_IO_BINDINGS: [Binding; 2] = [
     Binding::new(1, BindingKind::StorageBuffer),
 ];
 
+/// Step 1: the equirect (texel buffer), the cube, and the list of texels the near pass finishes
+/// (see `equirect_to_cube_body.glsl`).
+const TO_CUBE_BINDINGS: [Binding; 3] = [
+    Binding::new(0, BindingKind::UniformTexelBuffer),
+    Binding::new(1, BindingKind::StorageBuffer),
+    Binding::new(2, BindingKind::StorageBuffer),
+];
+
+/// Byte offset of the near pass's indirect dispatch arguments in the near-texel list (after its
+/// count), and of the texel indices (after the four-word header).
+const NEAR_DISPATCH_OFFSET: u64 = 4;
+const NEAR_HEADER_BYTES: u64 = 16;
+
 /// The four prefilter pipelines, made once.
 pub struct GpuPrefilter {
     equirect_to_cube: ComputePipeline,
+    /// Step 1's second dispatch, which finishes near-edge sub-samples in double precision; only
+    /// with shaderFloat64 (the fp32 shader has no near sub-samples).
+    equirect_near: Option<ComputePipeline>,
     downsample: ComputePipeline,
     blur_layer: ComputePipeline,
     irradiance: ComputePipeline,
@@ -67,21 +83,31 @@ fn groups(face: u32) -> u32 {
 impl GpuPrefilter {
     pub fn new(gpu: &GpuContext) -> Result<Self> {
         use crate::gpu::shaders::*;
+        let f64 = gpu.info().shader_float64;
         Ok(Self {
-            equirect_to_cube: if gpu.info().shader_float64 {
-                gpu.create_compute_pipeline(
-                    "equirect_to_cube_f64.comp",
-                    EQUIRECT_TO_CUBE_F64_COMP,
-                    &TEXEL_IO_BINDINGS,
+            equirect_to_cube: gpu.create_compute_pipeline(
+                if f64 {
+                    "equirect_to_cube_f64.comp"
+                } else {
+                    "equirect_to_cube.comp"
+                },
+                if f64 {
+                    EQUIRECT_TO_CUBE_F64_COMP
+                } else {
+                    EQUIRECT_TO_CUBE_COMP
+                },
+                &TO_CUBE_BINDINGS,
+                28,
+            )?,
+            equirect_near: if f64 {
+                Some(gpu.create_compute_pipeline(
+                    "equirect_to_cube_near.comp",
+                    EQUIRECT_TO_CUBE_NEAR_COMP,
+                    &TO_CUBE_BINDINGS,
                     28,
-                )?
+                )?)
             } else {
-                gpu.create_compute_pipeline(
-                    "equirect_to_cube.comp",
-                    EQUIRECT_TO_CUBE_COMP,
-                    &TEXEL_IO_BINDINGS,
-                    28,
-                )?
+                None
             },
             downsample: gpu.create_compute_pipeline(
                 "downsample.comp",
@@ -172,6 +198,20 @@ impl GpuPrefilter {
             storage,
         ))?;
 
+        // Texels whose sub-samples lie near a pixel edge: at most every texel of the base cube.
+        let near_capacity = if self.equirect_near.is_some() {
+            6 * u64::from(params.face_size) * u64::from(params.face_size)
+        } else {
+            0
+        };
+        let mut near_texels = gpu.create_buffer(BufferDesc::upload(
+            "near-edge texels",
+            NEAR_HEADER_BYTES + 4 * near_capacity,
+            BufferUsage::STORAGE | BufferUsage::INDIRECT,
+        ))?;
+        // Count 0; the near pass's dispatch (0, 1, 1) groups, counted up by step 1.
+        near_texels.write(&[0u32, 0, 1, 1])?;
+
         // Descriptor sets, made before recording so they outlive the submit.
         let set =
             |pipeline: &ComputePipeline, src: &Buffer, dst: &Buffer| -> Result<DescriptorSet> {
@@ -180,7 +220,17 @@ impl GpuPrefilter {
                     &[(0, Resource::TexelBuffer(src)), (1, Resource::Buffer(dst))],
                 )?)
             };
-        let to_cube_set = set(&self.equirect_to_cube, &source_buf, &mips[0])?;
+        let to_cube_resources = [
+            (0, Resource::TexelBuffer(&source_buf)),
+            (1, Resource::Buffer(&mips[0])),
+            (2, Resource::Buffer(&near_texels)),
+        ];
+        let to_cube_set =
+            gpu.create_descriptor_set(self.equirect_to_cube.layout(), &to_cube_resources)?;
+        let near_set = match &self.equirect_near {
+            Some(near) => Some(gpu.create_descriptor_set(near.layout(), &to_cube_resources)?),
+            None => None,
+        };
         let down_sets: Vec<DescriptorSet> = mips
             .windows(2)
             .map(|pair| set(&self.downsample, &pair[0], &pair[1]))
@@ -213,20 +263,30 @@ impl GpuPrefilter {
             };
             mark(rec);
             // 1. equirect → cube
+            let to_cube_constants = [
+                source.width,
+                source.height,
+                params.face_size,
+                (intensity as f32).to_bits(),
+                (rot_cos as f32).to_bits(),
+                (rot_sin as f32).to_bits(),
+                equirect_supersample(source.width, params.face_size),
+            ];
             rec.bind_compute(&self.equirect_to_cube, &to_cube_set);
             rec.push_constants(
                 &self.equirect_to_cube,
-                bytemuck::cast_slice(&[
-                    source.width,
-                    source.height,
-                    params.face_size,
-                    (intensity as f32).to_bits(),
-                    (rot_cos as f32).to_bits(),
-                    (rot_sin as f32).to_bits(),
-                    equirect_supersample(source.width, params.face_size),
-                ]),
+                bytemuck::cast_slice(&to_cube_constants),
             );
             rec.dispatch(groups(params.face_size), groups(params.face_size), 6);
+            if let (Some(near), Some(near_set)) = (&self.equirect_near, &near_set) {
+                // The list and its dispatch size, and the partial texels it rewrites.
+                rec.memory_barrier(Access::ComputeShaderWrite, Access::IndirectCommandRead);
+                rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
+                rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderWrite);
+                rec.bind_compute(near, near_set);
+                rec.push_constants(near, bytemuck::cast_slice(&to_cube_constants));
+                rec.dispatch_indirect(&near_texels, NEAR_DISPATCH_OFFSET);
+            }
             rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
             mark(rec);
             // 2. mip chain, each level from the previous one

@@ -20,6 +20,8 @@ impl BufferUsage {
     pub const STORAGE: Self = Self(vk::BufferUsageFlags::STORAGE_BUFFER);
     /// Read in shaders as a `samplerBuffer` of RGBA32F texels (`Resource::TexelBuffer`).
     pub const UNIFORM_TEXEL: Self = Self(vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER);
+    /// Holds the arguments of an indirect dispatch (`Recorder::dispatch_indirect`).
+    pub const INDIRECT: Self = Self(vk::BufferUsageFlags::INDIRECT_BUFFER);
     pub const TRANSFER_SRC: Self = Self(vk::BufferUsageFlags::TRANSFER_SRC);
     pub const TRANSFER_DST: Self = Self(vk::BufferUsageFlags::TRANSFER_DST);
 }

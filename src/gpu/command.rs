@@ -310,6 +310,16 @@ impl Recorder<'_> {
         unsafe { self.device.cmd_dispatch(self.cmd, x, y, z) };
     }
 
+    /// A dispatch whose group counts (three u32) the GPU reads from `buffer` at byte `offset` (a
+    /// multiple of 4), e.g. written by an earlier dispatch behind an `IndirectCommandRead` barrier.
+    pub fn dispatch_indirect(&mut self, buffer: &Buffer, offset: u64) {
+        // SAFETY: recording with a compute pipeline bound; the buffer was made with INDIRECT usage.
+        unsafe {
+            self.device
+                .cmd_dispatch_indirect(self.cmd, buffer.raw, offset)
+        };
+    }
+
     /// Copies every layer of a single-sampled image (in TransferSrc layout) to the start of
     /// `buffer`, tightly packed, layer after layer, row 0 first.
     pub fn copy_image_to_buffer(&mut self, image: &Image, buffer: &Buffer) {

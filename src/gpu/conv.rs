@@ -48,6 +48,8 @@ pub enum Access {
     TransferWrite,
     ComputeShaderRead,
     ComputeShaderWrite,
+    /// The arguments of an indirect dispatch or draw.
+    IndirectCommandRead,
     /// Vertex and index fetch.
     VertexInput,
     /// Uniform or storage reads in the vertex or fragment stage.
@@ -70,6 +72,7 @@ pub(crate) fn stage_access(access: Access) -> (vk::PipelineStageFlags2, vk::Acce
             A::SHADER_SAMPLED_READ | A::SHADER_STORAGE_READ | A::UNIFORM_READ,
         ),
         Access::ComputeShaderWrite => (S::COMPUTE_SHADER, A::SHADER_STORAGE_WRITE),
+        Access::IndirectCommandRead => (S::DRAW_INDIRECT, A::INDIRECT_COMMAND_READ),
         Access::VertexInput => (
             S::VERTEX_ATTRIBUTE_INPUT | S::INDEX_INPUT,
             A::VERTEX_ATTRIBUTE_READ | A::INDEX_READ,
