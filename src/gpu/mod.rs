@@ -22,6 +22,14 @@
 //!     irradiance source at 6·32² texels.
 //!   - GLSL `acos`/`atan` have no useful precision guarantee in Vulkan and lavapipe's acos is off by
 //!     ~1e-4 rad: shaders use `common/math.glsl` instead.
+//!   - lavapipe loads an SSBO element lane by lane unless the address is provably uniform (a loop
+//!     counter is not), which dominated the prefilter's inner loops: gathered reads use texel
+//!     buffers (`BindingKind::UniformTexelBuffer`) instead.
+//!   - lavapipe runs a loop's body once, masked, even when no lane enters it, and both sides of
+//!     every `if`: rare expensive work goes to a separate dispatch over a compacted list (the
+//!     prefilter's near-edge pass), not behind a condition.
+//!   - After a graphics pass, lavapipe writes a timestamp at the rasterizer's next flush, not
+//!     where it was recorded, so later compute-only timestamps land one pass late (BENCHMARKS.md).
 
 mod adapter;
 mod buffer;
