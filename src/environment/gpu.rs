@@ -397,17 +397,14 @@ fn check_device_limits(
     params: &PrefilterParams,
 ) -> Result<()> {
     if !cube_fits(info, params.face_size) {
+        let largest = largest_face_size(info);
         return Err(Error::invalid(
             "face size",
             params.face_size,
             format!(
-                "{} holds at most face {} in one buffer (maxStorageBufferRange {} bytes, \
-                 maxTexelBufferElements {}); use --face-size {} or smaller",
-                info.name,
-                largest_face_size(info),
-                info.max_storage_buffer_range,
-                info.max_texel_buffer_elements,
-                largest_face_size(info)
+                "{} holds at most face {largest} in one buffer (maxStorageBufferRange {} bytes, \
+                 maxTexelBufferElements {}); use --face-size {largest} or smaller",
+                info.name, info.max_storage_buffer_range, info.max_texel_buffer_elements,
             ),
         ));
     }

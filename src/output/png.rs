@@ -10,7 +10,7 @@ use image::{ExtendedColorType, ImageEncoder, ImageFormat};
 use rayon::prelude::*;
 
 use super::image::HdrImage;
-use super::tonemap::{unit_to_u8, PngSettings, Srgb8Encoder};
+use super::tonemap::{to_srgb8, unit_to_u8, PngSettings, Srgb8Encoder};
 use crate::{Error, Result};
 
 /// zlib level of the PNG encoder (1 fastest … 9 smallest).
@@ -63,20 +63,24 @@ pub fn encode_png(image: &HdrImage, settings: &PngSettings) -> Result<Vec<u8>> {
 /// One pixel as PNG stores it: colour un-premultiplied by coverage, then exposure → tone curve →
 /// sRGB → 8 bits; alpha rounded to 8 bits. Also the C API's RGBA8 render.
 pub fn straight_srgb8(pixel: [f32; 4], settings: &PngSettings) -> [u8; 4] {
-    straight_srgb8_with(pixel, &Srgb8Encoder::new(settings))
+    straight_pixel(pixel, |radiance| to_srgb8(radiance, settings))
 }
 
-/// [`straight_srgb8`] with the encoder of its settings made once, for whole images.
+/// [`straight_srgb8`] through the encoder of its settings, made once per image (the same bytes).
 pub fn straight_srgb8_with(pixel: [f32; 4], encoder: &Srgb8Encoder) -> [u8; 4] {
+    straight_pixel(pixel, |radiance| encoder.encode(radiance))
+}
+
+fn straight_pixel(pixel: [f32; 4], encode: impl Fn(f32) -> u8) -> [u8; 4] {
     let [r, g, b, a] = pixel;
     let alpha = a.clamp(0.0, 1.0);
     // Premultiplied colour is radiance × coverage; dividing by coverage recovers the radiance of
     // the covered part, which is what a straight-alpha viewer composites.
     let unpremultiply = if alpha > 0.0 { 1.0 / alpha } else { 1.0 };
     [
-        encoder.encode(r * unpremultiply),
-        encoder.encode(g * unpremultiply),
-        encoder.encode(b * unpremultiply),
+        encode(r * unpremultiply),
+        encode(g * unpremultiply),
+        encode(b * unpremultiply),
         unit_to_u8(alpha),
     ]
 }
