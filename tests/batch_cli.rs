@@ -1,6 +1,7 @@
 //! `shikki batch` end to end (validated Vulkan): a 2 × 3 sweep gives 6 images, a manifest and a
 //! contact sheet; shards are disjoint and cover the sweep; a resumed run renders only what is
-//! missing; a failing job is recorded and makes the exit code non-zero.
+//! missing; a failing job is recorded and makes the exit code non-zero; the example sweep writes
+//! 30 distinct images, and jobs that would share a file are refused before anything is written.
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -209,4 +210,70 @@ fn a_failing_job_is_recorded_the_others_finish_and_the_exit_code_is_nonzero() {
             || rows[1].iter().any(|f| f.contains("failed"))
     );
     assert!(out_dir.join("contact_sheet.png").exists());
+}
+
+/// The example batch (its `name` template and sweeps, as shipped) with a tiny inline scene in
+/// place of `default.toml`, so its 30 jobs render in seconds.
+fn small_example() -> String {
+    let example = include_str!("../examples/ratio-sweep.jobs.toml");
+    let mut text: String = example
+        .lines()
+        .filter(|l| !l.starts_with("scene ="))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    text.push_str(
+        "[scene]\nenvironment = \"none\"\n[scene.output]\nsize = \"16x16\"\nsamples = 1\n\
+         [[scene.object]]\nmesh = \"builtin:sphere\"\n",
+    );
+    text
+}
+
+#[test]
+fn the_example_sweep_writes_thirty_images_and_thirty_manifest_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("jobs.toml"), small_example()).unwrap();
+    let out = shikki(dir.path(), &["batch", "jobs.toml", "--out", "out"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out_dir = dir.path().join("out");
+    assert_eq!(pngs(&out_dir).len(), 30, "{:?}", pngs(&out_dir));
+    let rows = manifest_rows(&out_dir.join("manifest.csv"));
+    assert_eq!(rows.len(), 30);
+    // job, three sweep columns, output, scene_hash, status.
+    assert!(
+        rows.iter().all(|r| r.len() == 7 && r[6] == "ok"),
+        "{rows:?}"
+    );
+    let outputs: BTreeSet<&String> = rows.iter().map(|r| &r[4]).collect();
+    assert_eq!(outputs.len(), 30, "two rows name one file: {rows:?}");
+    assert!(outputs.iter().all(|o| out_dir.join(o).is_file()));
+}
+
+#[test]
+fn jobs_that_share_a_file_are_refused_before_anything_is_written() {
+    // Without {orbit_deg}, the three view angles of each (preset, r) write one file.
+    let dir = tempfile::tempdir().unwrap();
+    let jobs = small_example().replace("{preset}-r{r}-orbit{orbit_deg}", "{preset}-r{r}");
+    std::fs::write(dir.path().join("jobs.toml"), jobs).unwrap();
+    for shard in [None, Some("1/2")] {
+        let mut args = vec!["batch", "jobs.toml", "--out", "out"];
+        args.extend(shard.iter().flat_map(|s| ["--shard", *s]));
+        let out = shikki(dir.path(), &args);
+        assert!(!out.status.success(), "shard {shard:?}");
+        let err = stderr(&out);
+        for fragment in [
+            "jobs.toml:",
+            "job 0 (object.0.material.preset = smooth-red, object.0.material.r = 1, \
+             camera.orbit_deg = -30)",
+            "job 1 (object.0.material.preset = smooth-red, object.0.material.r = 1, \
+             camera.orbit_deg = 0)",
+            "would both write smooth-red-r1.png",
+            "add {orbit_deg}, the sweep that tells them apart, to `name`",
+        ] {
+            assert!(err.contains(fragment), "{fragment:?} not in: {err}");
+        }
+        assert!(
+            !dir.path().join("out").exists(),
+            "shard {shard:?} wrote files"
+        );
+    }
 }

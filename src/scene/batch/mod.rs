@@ -8,10 +8,15 @@
 //! "camera.orbit_deg" = [0, 45, 90]
 //! ```
 //!
-//! Owns the plan (jobs, their ids, names and shards); [`run`] owns execution, [`manifest`] the CSV
-//! record and resume rule, [`sheet`] the contact sheet, [`sink`] the atomic file writes. Rendering itself is [`super::SceneRenderer`].
+//! Owns the plan (jobs, their ids and shards); [`name`] owns the file-name rule and `collisions`
+//! the check, made when a plan is parsed and again before a run, that no two jobs of the whole
+//! jobs file share an output file. [`run`] owns execution, [`manifest`] the CSV record and resume
+//! rule, [`sheet`] the contact sheet, [`sink`] the atomic file writes. Rendering itself is
+//! [`super::SceneRenderer`].
 
+mod collisions;
 pub mod manifest;
+pub mod name;
 pub mod run;
 pub mod sheet;
 pub mod sink;
@@ -160,6 +165,7 @@ impl BatchPlan {
             name_at,
         };
         plan.check_template()?;
+        plan.check_outputs()?;
         Ok(plan)
     }
 
@@ -175,16 +181,26 @@ impl BatchPlan {
 
     /// Job `id` (mixed-radix digits of the id, last sweep fastest).
     pub fn job(&self, id: usize) -> JobSpec {
-        let mut rest = id;
-        let mut values = vec![None; self.sweeps.len()];
-        for (slot, sweep) in values.iter_mut().zip(&self.sweeps).rev() {
-            let n = sweep.values.len();
-            *slot = Some((sweep.path.clone(), sweep.values[rest % n].clone()));
-            rest /= n;
-        }
+        let mut digits = vec![0; self.sweeps.len()];
+        self.digits(id, &mut digits);
         JobSpec {
             id,
-            values: values.into_iter().flatten().collect(),
+            values: self
+                .sweeps
+                .iter()
+                .zip(digits)
+                .map(|(sweep, d)| (sweep.path.clone(), sweep.values[d].clone()))
+                .collect(),
+        }
+    }
+
+    /// The index into each sweep's values of job `id`, into `digits` (one per sweep).
+    fn digits(&self, id: usize, digits: &mut [usize]) {
+        let mut rest = id;
+        for (digit, sweep) in digits.iter_mut().zip(&self.sweeps).rev() {
+            let n = sweep.values.len();
+            *digit = rest % n;
+            rest /= n;
         }
     }
 
@@ -207,63 +223,28 @@ impl BatchPlan {
     }
 
     /// The template with `{job}` (the id, zero-padded to the width of the largest id) and
-    /// `{path}` or `{last.segment}` of each sweep replaced; values made file-name safe.
+    /// `{path}` or `{last.segment}` of each sweep replaced, by the rule of [`name`].
     pub fn file_name(&self, job: &JobSpec, format: OutputFormat) -> Result<String> {
-        let width = self.job_count().saturating_sub(1).to_string().len();
-        let mut name = String::new();
-        let mut rest = self.name_template.as_str();
-        while let Some(open) = rest.find('{') {
-            name.push_str(&rest[..open]);
-            let Some(close) = rest[open..].find('}') else {
-                return Err(self.name_at.error("`name` has a `{` without its `}`"));
-            };
-            let key = &rest[open + 1..open + close];
-            let value = if key == "job" {
-                format!("{:0width$}", job.id)
-            } else {
-                let index = self.placeholder(key)?;
-                sanitize(&job.values[index].1.value.to_text())
-            };
-            name.push_str(&value);
-            rest = &rest[open + close + 1..];
-        }
-        name.push_str(rest);
-        let extension = match format {
-            OutputFormat::Png => ".png",
-            OutputFormat::Exr => ".exr",
-        };
-        if !name.to_ascii_lowercase().ends_with(extension) {
-            name.push_str(extension);
-        }
-        Ok(name)
+        let template = name::Template::parse(
+            &self.name_template,
+            &self.sweeps,
+            self.job_count(),
+            &self.name_at,
+        )?;
+        let escaped: Vec<String> = job
+            .values
+            .iter()
+            .map(|(_, v)| name::escape_value(&v.value.to_text()))
+            .collect();
+        let values: Vec<&str> = escaped.iter().map(String::as_str).collect();
+        Ok(template.compose(job.id, &values, format))
     }
 
-    /// The sweep a placeholder names: its full path, or its last segment if no other sweep's
-    /// last segment is the same.
-    fn placeholder(&self, key: &str) -> Result<usize> {
-        if let Some(k) = self.sweeps.iter().position(|s| s.path == key) {
-            return Ok(k);
-        }
-        let matches: Vec<usize> = (0..self.sweeps.len())
-            .filter(|&k| self.sweeps[k].path.rsplit('.').next() == Some(key))
-            .collect();
-        match matches[..] {
-            [k] => Ok(k),
-            _ => {
-                let valid: Vec<String> = std::iter::once("{job}".to_string())
-                    .chain(self.sweeps.iter().map(|s| format!("{{{}}}", s.path)))
-                    .collect();
-                Err(self.name_at.error(format!(
-                    "`name` placeholder {{{key}}} names no sweep{}; valid: {}",
-                    if matches.len() > 1 {
-                        " unambiguously"
-                    } else {
-                        ""
-                    },
-                    valid.join(", ")
-                )))
-            }
-        }
+    /// Refuses the plan if two of its jobs — of any shard — would write one file (names compared
+    /// case-insensitively), or a name is empty, too long or the contact sheet's. Made by
+    /// [`BatchPlan::parse`] and again by [`run_batch`] before anything is written.
+    pub fn check_outputs(&self) -> Result<()> {
+        collisions::check_outputs(self)
     }
 
     fn check_template(&self) -> Result<()> {
@@ -280,21 +261,6 @@ impl BatchPlan {
         }
         Ok(())
     }
-}
-
-/// Keeps letters, digits, `.`, `-`, `_`; anything else becomes `-`.
-fn sanitize(text: &str) -> String {
-    text.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_') {
-                c
-            } else {
-                '-'
-            }
-        })
-        .collect::<String>()
-        .trim_matches('-')
-        .to_string()
 }
 
 /// SHA-256 of every resolved value of the scene (Debug prints each f64 exactly) and the format.

@@ -1,6 +1,8 @@
 //! Executes a [`BatchPlan`]: one GPU context and one [`SceneRenderer`] for the whole run; the
 //! render thread hands each image to a writer thread (bounded channel) that encodes, writes,
 //! records the manifest and keeps the contact-sheet tile, so encoding overlaps the next render.
+//! Before the output directory is even created, [`BatchPlan::check_outputs`] refuses a plan in
+//! which two jobs would share a file.
 //!
 //! A failed job is reported, recorded (`failed: …` in the manifest, a red tile) and leaves no
 //! output file; the run continues and [`BatchSummary::failed`] makes the exit code non-zero. That
@@ -100,6 +102,9 @@ pub fn run_batch(
     plan: &BatchPlan,
     options: &BatchOptions,
 ) -> Result<BatchSummary> {
+    // Every job's name, not only this shard's: shards share directories. `parse` checked this
+    // already; the plan's fields are public, so it is checked again before a file is written.
+    plan.check_outputs()?;
     std::fs::create_dir_all(&options.out_dir).map_err(|e| Error::Write {
         path: options.out_dir.clone(),
         message: format!("cannot create the output directory: {e}"),
