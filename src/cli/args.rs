@@ -42,6 +42,9 @@ pub enum Command {
     /// Measure every stage (render, prefilter, batch, start-up, memory): medians of repeated runs
     /// and same-run ratios against the performance targets (BENCHMARKS.md).
     Bench(super::bench::BenchArgs),
+    /// Export a built-in mesh as OBJ or GLB (for Blender or another renderer); the file loads
+    /// back in shikki to the same triangles.
+    Mesh(super::mesh_cmd::MeshArgs),
 }
 
 /// A preset and `--set` overrides: the material of SPEC §2–3.
@@ -91,8 +94,8 @@ pub struct RenderArgs {
     pub size: (u32, u32),
     #[command(flatten)]
     pub material: MaterialArgs,
-    /// builtin:sphere or builtin:board.
-    #[arg(long, default_value = "builtin:sphere")]
+    // The help lists `BuiltinMesh::ALL`, so a new built-in appears in it without an edit here.
+    #[arg(long, default_value = "builtin:sphere", help = mesh_help())]
     pub mesh: String,
     /// Camera position x,y,z.
     #[arg(long, value_parser = parse_vec3_arg, allow_hyphen_values = true)]
@@ -104,7 +107,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub fov: Option<f64>,
     /// dir:x,y,z:r,g,b (towards the light; irradiance) or point:x,y,z:r,g,b (position;
-    /// intensity). Repeatable; without any, a default key, fill and rim light.
+    /// intensity). Repeatable; without any, a default key, fill and rim light; `none` for no
+    /// lights at all (only the environment), on its own.
     #[arg(long = "light", allow_hyphen_values = true)]
     pub lights: Vec<String>,
     /// MSAA samples per pixel: 1 or 4.
@@ -206,6 +210,11 @@ impl Default for RenderArgs {
             },
         }
     }
+}
+
+/// The help of `render --mesh`: every built-in by name.
+pub(super) fn mesh_help() -> String {
+    format!("The mesh, one of: {}.", crate::raster::BuiltinMesh::list())
 }
 
 /// `env`, `transparent` or `r,g,b` (linear, finite, ≥ 0).

@@ -181,6 +181,9 @@ pub fn board() -> Mesh {
 }
 
 /// The meshes shikki builds itself, named `builtin:<name>` on the command line.
+///
+/// [`BuiltinMesh::ALL`] and [`BuiltinMesh::name`] are the one list of them: parsing, error
+/// messages, `--help` and `shikki mesh` all read it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BuiltinMesh {
     Sphere,
@@ -191,31 +194,131 @@ pub enum BuiltinMesh {
     Plate,
 }
 
-const BUILTIN_NAMES: &str = "builtin:sphere, builtin:board, builtin:bowl, builtin:plate";
+/// What a built-in's name follows: `builtin:bowl`.
+pub const BUILTIN_PREFIX: &str = "builtin:";
+
+/// The segment counts a tessellated built-in takes (segments around its +Y axis). 4 is the
+/// coarsest closed solid (a sphere of 4 × 2); 2048 keeps the finest, the bowl's
+/// 2048·(2·1568 − 2) ≈ 6.4 M triangles, far below the mesh loader's limit, so an exported file
+/// always loads back.
+pub const BUILTIN_SEGMENTS: std::ops::RangeInclusive<u32> = 4..=2048;
 
 impl BuiltinMesh {
-    /// `builtin:sphere`, `builtin:board`, `builtin:bowl` or `builtin:plate`.
+    /// Every built-in, in the order help and error messages list them.
+    pub const ALL: [BuiltinMesh; 4] = [
+        BuiltinMesh::Sphere,
+        BuiltinMesh::Board,
+        BuiltinMesh::Bowl,
+        BuiltinMesh::Plate,
+    ];
+
+    /// The name after `builtin:`.
+    pub fn name(self) -> &'static str {
+        match self {
+            BuiltinMesh::Sphere => "sphere",
+            BuiltinMesh::Board => "board",
+            BuiltinMesh::Bowl => "bowl",
+            BuiltinMesh::Plate => "plate",
+        }
+    }
+
+    /// `builtin:<name>`, as the command line and scene files spell it.
+    pub fn spec(self) -> String {
+        format!("{BUILTIN_PREFIX}{}", self.name())
+    }
+
+    /// "builtin:sphere, builtin:board, …": every built-in, for help and error messages.
+    pub fn list() -> String {
+        Self::ALL.map(Self::spec).join(", ")
+    }
+
+    /// `builtin:<name>` for one of [`BuiltinMesh::ALL`].
     pub fn parse(spec: &str) -> Result<Self> {
-        match spec.trim() {
-            "builtin:sphere" => Ok(BuiltinMesh::Sphere),
-            "builtin:board" => Ok(BuiltinMesh::Board),
-            "builtin:bowl" => Ok(BuiltinMesh::Bowl),
-            "builtin:plate" => Ok(BuiltinMesh::Plate),
-            _ => Err(Error::invalid(
-                "mesh",
-                spec,
-                format!("unknown built-in mesh; valid: {BUILTIN_NAMES}"),
-            )),
+        let trimmed = spec.trim();
+        trimmed
+            .strip_prefix(BUILTIN_PREFIX)
+            .and_then(|name| Self::ALL.into_iter().find(|b| b.name() == name))
+            .ok_or_else(|| {
+                Error::invalid(
+                    "mesh",
+                    spec,
+                    format!("unknown built-in mesh; valid: {}", Self::list()),
+                )
+            })
+    }
+
+    /// The segments around the axis of the default tessellation; `None` for the board, whose
+    /// two triangles are exact.
+    pub fn default_segments(self) -> Option<u32> {
+        match self {
+            BuiltinMesh::Sphere => Some(SPHERE_SEGMENTS_AROUND),
+            BuiltinMesh::Board => None,
+            BuiltinMesh::Bowl | BuiltinMesh::Plate => Some(LATHE_SEGMENTS_AROUND),
         }
     }
 
     /// The mesh at its default tessellation.
     pub fn mesh(self) -> Mesh {
+        match self.default_segments() {
+            Some(segments) => self.tessellate(segments),
+            None => board(),
+        }
+    }
+
+    /// The mesh with `segments` around its +Y axis (in [`BUILTIN_SEGMENTS`]); the other
+    /// direction keeps the default's proportion (sphere: segments/2 down; bowl and plate:
+    /// segments·196/256 along the profile), so `segments` = the default gives [`Self::mesh`].
+    /// An error for the board, which has no segments, and for a count out of range.
+    pub fn mesh_with_segments(self, segments: u32) -> Result<Mesh> {
+        if self.default_segments().is_none() {
+            return Err(Error::invalid(
+                "segments",
+                segments,
+                format!(
+                    "{} is exact and has no segments; only the tessellated built-ins take them ({})",
+                    self.spec(),
+                    Self::ALL
+                        .into_iter()
+                        .filter(|b| b.default_segments().is_some())
+                        .map(Self::spec)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
+        if !BUILTIN_SEGMENTS.contains(&segments) {
+            return Err(Error::invalid(
+                "segments",
+                segments,
+                format!(
+                    "{} takes {}..={} segments around its axis",
+                    self.spec(),
+                    BUILTIN_SEGMENTS.start(),
+                    BUILTIN_SEGMENTS.end()
+                ),
+            ));
+        }
+        Ok(self.tessellate(segments))
+    }
+
+    /// `segments` around; the second count is the default ratio, rounded to nearest.
+    fn tessellate(self, around: u32) -> Mesh {
+        let scaled = |default_other: u32, default_around: u32| {
+            ((around * default_other + default_around / 2) / default_around).max(1)
+        };
         match self {
-            BuiltinMesh::Sphere => sphere(SPHERE_SEGMENTS_AROUND, SPHERE_SEGMENTS_DOWN),
+            BuiltinMesh::Sphere => {
+                sphere(around, scaled(SPHERE_SEGMENTS_DOWN, SPHERE_SEGMENTS_AROUND))
+            }
             BuiltinMesh::Board => board(),
-            BuiltinMesh::Bowl => lathe::bowl(LATHE_SEGMENTS_AROUND, LATHE_PROFILE_SEGMENTS),
-            BuiltinMesh::Plate => lathe::plate(LATHE_SEGMENTS_AROUND, LATHE_PROFILE_SEGMENTS),
+            BuiltinMesh::Bowl => lathe::bowl(
+                around,
+                scaled(LATHE_PROFILE_SEGMENTS, LATHE_SEGMENTS_AROUND),
+            ),
+            BuiltinMesh::Plate => lathe::plate(
+                around,
+                scaled(LATHE_PROFILE_SEGMENTS, LATHE_SEGMENTS_AROUND),
+            ),
         }
     }
 }
@@ -337,6 +440,53 @@ mod tests {
                 other => panic!("expected invalid {field}, got {other:?}"),
             }
         }
+    }
+
+    #[test]
+    fn every_builtin_round_trips_through_its_spec_and_the_list_names_each() {
+        let list = BuiltinMesh::list();
+        for builtin in BuiltinMesh::ALL {
+            assert_eq!(BuiltinMesh::parse(&builtin.spec()).unwrap(), builtin);
+            assert!(list.contains(&builtin.spec()), "{list}");
+        }
+        // The names are distinct, so parse finds exactly one.
+        let mut names = BuiltinMesh::ALL.map(BuiltinMesh::name).to_vec();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), BuiltinMesh::ALL.len());
+    }
+
+    #[test]
+    fn segments_at_the_default_give_the_default_mesh_and_errors_name_the_range() {
+        for builtin in BuiltinMesh::ALL {
+            match builtin.default_segments() {
+                Some(default) => {
+                    assert_eq!(builtin.mesh_with_segments(default).unwrap(), builtin.mesh());
+                    let coarse = builtin
+                        .mesh_with_segments(*BUILTIN_SEGMENTS.start())
+                        .unwrap();
+                    coarse.validate().unwrap();
+                    for bad in [BUILTIN_SEGMENTS.start() - 1, BUILTIN_SEGMENTS.end() + 1, 0] {
+                        match builtin.mesh_with_segments(bad) {
+                            Err(Error::InvalidParameter { reason, .. }) => {
+                                assert!(reason.contains("4..=2048"), "{reason}")
+                            }
+                            other => panic!("{bad}: {other:?}"),
+                        }
+                    }
+                }
+                None => match builtin.mesh_with_segments(64) {
+                    Err(Error::InvalidParameter { reason, .. }) => {
+                        assert!(reason.contains("no segments"), "{reason}")
+                    }
+                    other => panic!("{other:?}"),
+                },
+            }
+        }
+        // Sphere: N around, N/2 down (8 × 4: 2 + 3·8 vertices, 2·8·3 triangles).
+        let sphere = BuiltinMesh::Sphere.mesh_with_segments(8).unwrap();
+        assert_eq!(sphere.positions.len(), 26);
+        assert_eq!(sphere.triangle_count(), 48);
     }
 
     #[test]

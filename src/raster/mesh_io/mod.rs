@@ -1,5 +1,6 @@
 //! Mesh files: Wavefront OBJ (`tobj`) and glTF 2.0 / GLB (`gltf`), loaded into one world-space
-//! [`Mesh`] ready for the draw.
+//! [`Mesh`] ready for the draw; and [`export`], which writes a mesh as OBJ or GLB that loads back
+//! here to the same triangles (`shikki mesh`).
 //!
 //! Owns file-format dispatch, the clean-up every loaded mesh goes through (degenerate triangles
 //! dropped, missing or broken normals generated, unreferenced vertices removed, limits) and
@@ -19,6 +20,7 @@
 //!   declared counts before the mesh is allocated; a glTF/GLB file or external buffer larger than
 //!   [`MAX_MESH_FILE_BYTES`] is refused from its length before it is read (OBJ is streamed).
 
+pub mod export;
 mod gltf;
 mod gltf_buffers;
 pub mod normals;
@@ -28,6 +30,7 @@ use std::path::Path;
 
 use glam::{DMat4, DVec3};
 
+pub use export::{write_mesh, MeshFileFormat};
 pub use normals::angle_weighted_normals;
 
 use super::mesh::Mesh;
