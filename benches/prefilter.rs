@@ -1,6 +1,6 @@
 //! Prefilter time for face 512, K = 8 (issue 7): the GPU compute pipeline vs the CPU oracle on
 //! all cores, same input, same parameters, for three sources: builtin:studio (1024 × 512, the
-//! headline figure), the real courtyard HDRI of ../shared/env (1024 × 512, when present) and
+//! headline figure), the real courtyard HDRI of assets/env (1024 × 512) and
 //! studio doubled to 2048 × 1024 (pixel-replicated: same content, the 4 × 4 box filter of step 1).
 //! Medians of repeated runs after a warm-up — wall clock and each pass's GPU timestamps — and
 //! their ratio, all measured in one run. `cargo bench --bench prefilter`;
@@ -156,11 +156,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     let studio = load_environment("builtin:studio")?.image;
     bench(&gpu, &prefilter, "builtin:studio", &studio, runs, with_cpu)?;
-    let courtyard = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/env/courtyard.hdr");
-    if std::path::Path::new(courtyard).exists() {
-        let source = load_environment(courtyard)?.image;
-        bench(&gpu, &prefilter, "courtyard.hdr", &source, runs, with_cpu)?;
-    }
+    let courtyard = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/courtyard.hdr");
+    let source = load_environment(courtyard)?.image;
+    bench(&gpu, &prefilter, "courtyard.hdr", &source, runs, with_cpu)?;
     let large = doubled(&studio);
     bench(&gpu, &prefilter, "studio doubled", &large, runs, with_cpu)?;
     Ok(())

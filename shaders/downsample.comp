@@ -10,9 +10,9 @@ layout(push_constant) uniform Params {
     uint dst_face_size;
 } params;
 
-// RGBA32F texels read with texelFetch: on llvmpipe a per-lane texel-buffer fetch costs far less than
-// a per-lane SSBO load (measured: the irradiance pass 2.3× faster; BENCHMARKS.md).
-layout(set = 0, binding = 0) uniform samplerBuffer src;
+// RGBA32F texels.
+#include "texel_buffer.glsl"
+layout(set = 0, binding = 0) uniform textureBuffer src;
 layout(std430, set = 0, binding = 1) writeonly buffer Dest { vec4 dst[]; };
 
 void main() {

@@ -413,15 +413,12 @@ fn prefilter_rejects_bad_parameters() {
     assert!(stderr(&out).contains("nothing.hdr"), "{}", stderr(&out));
 }
 
-fn shared_env(name: &str) -> String {
+/// A CC0 HDRI shipped in the repository (`assets/env/`, licence beside the files).
+fn asset_env(name: &str) -> String {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/env")
+        .join("assets/env")
         .join(name);
-    assert!(
-        path.exists(),
-        "{} is missing (shared/ must sit beside the repository)",
-        path.display()
-    );
+    assert!(path.exists(), "{} is missing", path.display());
     path.display().to_string()
 }
 
@@ -429,7 +426,7 @@ fn shared_env(name: &str) -> String {
 fn real_hdris_load_and_render() {
     let dir = tempfile::tempdir().unwrap();
     for name in ["studio_piz.exr", "studio.hdr"] {
-        let env = shared_env(name);
+        let env = asset_env(name);
         let args = [
             "render",
             "-o",

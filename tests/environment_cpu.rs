@@ -1,6 +1,6 @@
 //! The CPU side of the environment (issue 3), without a GPU: the prefilter oracle against SPEC §4's
-//! definition on a synthetic map, seams at cube edges, and the real HDRIs of `../shared/env`
-//! (plus Debian's DWAB original when blender-data is installed), and OpenEXR decoding through
+//! definition on a synthetic map, seams at cube edges, and the real HDRIs of `assets/env`
+//! (plus Debian's DWAB original, `studio_dwab.exr`), and OpenEXR decoding through
 //! every compression the `exr` crate writes. The timing of the oracle at
 //! face 512, K = 8 is a benchmark: `cargo bench --bench prefilter`.
 
@@ -281,16 +281,17 @@ fn no_layer_has_a_seam_at_cube_edges() {
     }
 }
 
-fn shared_env(name: &str) -> PathBuf {
+/// A CC0 HDRI shipped in the repository (`assets/env/`, licence beside the files).
+fn asset_env(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/env")
+        .join("assets/env")
         .join(name)
 }
 
 #[test]
 fn studio_exr_and_hdr_agree_to_rgbe_precision() {
-    let exr = load_environment(shared_env("studio_piz.exr").to_str().unwrap()).unwrap();
-    let hdr = load_environment(shared_env("studio.hdr").to_str().unwrap()).unwrap();
+    let exr = load_environment(asset_env("studio_piz.exr").to_str().unwrap()).unwrap();
+    let hdr = load_environment(asset_env("studio.hdr").to_str().unwrap()).unwrap();
     assert_eq!((exr.image.width, exr.image.height), (1024, 512));
     assert_eq!((hdr.image.width, hdr.image.height), (1024, 512));
     // The EXR (decoded from DWAB, whose DCT rings) has three pixels with a red of −6e-8 … −3e-6;
@@ -333,7 +334,7 @@ fn studio_exr_and_hdr_agree_to_rgbe_precision() {
 #[test]
 fn courtyard_loads_in_both_formats() {
     for name in ["courtyard_piz.exr", "courtyard.hdr"] {
-        let loaded = load_environment(shared_env(name).to_str().unwrap()).unwrap();
+        let loaded = load_environment(asset_env(name).to_str().unwrap()).unwrap();
         assert_eq!(
             (loaded.image.width, loaded.image.height),
             (1024, 512),
@@ -344,17 +345,10 @@ fn courtyard_loads_in_both_formats() {
 
 #[test]
 fn blender_dwab_original_decodes_like_its_piz_copy() {
-    // Debian's blender-data (not installed in CI): the DWAB original of studio_piz.exr.
-    let original = PathBuf::from("/usr/share/blender/datafiles/studiolights/world/studio.exr");
-    let Ok(bytes) = std::fs::read(&original) else {
-        println!(
-            "skipped: {} not installed (apt-get install blender-data)",
-            original.display()
-        );
-        return;
-    };
-    let dwab = decode_exr(&bytes, "studio.exr").unwrap();
-    let piz_bytes = std::fs::read(shared_env("studio_piz.exr")).unwrap();
+    // Debian's blender-data studio.exr, unchanged: the DWAB original of studio_piz.exr.
+    let bytes = std::fs::read(asset_env("studio_dwab.exr")).unwrap();
+    let dwab = decode_exr(&bytes, "studio_dwab.exr").unwrap();
+    let piz_bytes = std::fs::read(asset_env("studio_piz.exr")).unwrap();
     let piz = decode_exr(&piz_bytes, "studio_piz.exr").unwrap();
     // The PIZ copy holds, in half, the pixels OpenEXR's own DWAB decoder produced: the `exr`
     // crate's DWAB decoder must give back exactly those halves (measured: all 1,572,864 equal).

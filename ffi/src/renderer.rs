@@ -165,8 +165,12 @@ pub unsafe extern "C" fn shikki_renderer_create(
 ) -> ShikkiStatus {
     ffi_boundary!({
         check_out(out, "out")?;
+        let no_ray_query = std::env::var("SHIKKI_RAY_QUERY").is_ok_and(|v| v == "0");
         let context = if options.is_null() {
-            ContextOptions::default()
+            ContextOptions {
+                no_ray_query,
+                ..ContextOptions::default()
+            }
         } else {
             // SAFETY: non-NULL and readable by the caller's contract.
             let options = unsafe { &*options };
@@ -175,6 +179,7 @@ pub unsafe extern "C" fn shikki_renderer_create(
             ContextOptions {
                 validation: options.validation,
                 device_name: device.filter(|d| !d.is_empty()).map(str::to_string),
+                no_ray_query,
                 ..ContextOptions::default()
             }
         };

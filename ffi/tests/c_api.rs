@@ -336,10 +336,13 @@ fn c_threads_are_valgrind_clean() {
 }
 
 /// The ICD library lavapipe is loaded from (from its Vulkan ICD manifest), for the sanitizer run.
+/// The manifest is `VK_DRIVER_FILES` when set, else the first `lvp_icd*.json` in the loader's
+/// system directories (Mesa ≥ 24 installs `lvp_icd.json`, older ones `lvp_icd.<arch>.json`).
 fn lavapipe_library() -> PathBuf {
     let manifest = std::env::var_os("VK_DRIVER_FILES")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("/usr/share/vulkan/icd.d/lvp_icd.x86_64.json"));
+        .or_else(find_lavapipe_manifest)
+        .expect("no lavapipe ICD manifest (lvp_icd*.json) in /usr/share/vulkan/icd.d or /etc/vulkan/icd.d");
     let text = std::fs::read_to_string(&manifest)
         .unwrap_or_else(|e| panic!("cannot read the lavapipe ICD manifest {manifest:?}: {e}"));
     // "library_path": "<path>" — the one string field needed, without a JSON dependency.
@@ -348,7 +351,26 @@ fn lavapipe_library() -> PathBuf {
         .nth(1)
         .and_then(|rest| rest.split('"').nth(1))
         .unwrap_or_else(|| panic!("{manifest:?} has no library_path"));
-    PathBuf::from(path)
+    // The loader's rules: a bare file name is found by the dynamic linker's search (as LD_PRELOAD
+    // finds it too), a relative path with a slash is relative to the manifest's directory.
+    let path = PathBuf::from(path);
+    if path.is_absolute() || path.components().count() == 1 {
+        path
+    } else {
+        manifest.parent().unwrap_or(Path::new("/")).join(path)
+    }
+}
+
+fn find_lavapipe_manifest() -> Option<PathBuf> {
+    ["/usr/share/vulkan/icd.d", "/etc/vulkan/icd.d"]
+        .iter()
+        .filter_map(|dir| std::fs::read_dir(dir).ok())
+        .flat_map(|entries| entries.filter_map(|e| e.ok()).map(|e| e.path()))
+        .find(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with("lvp_icd") && n.ends_with(".json"))
+        })
 }
 
 /// AddressSanitizer + UndefinedBehaviorSanitizer (+ LeakSanitizer) on both programs.

@@ -30,9 +30,9 @@ layout(push_constant) uniform Params {
     uint supersample;
 } params;
 
-// RGBA32F texels read with texelFetch: on llvmpipe a per-lane texel-buffer fetch costs far less than
-// a per-lane SSBO load (measured: the irradiance pass 2.3× faster; BENCHMARKS.md).
-layout(set = 0, binding = 0) uniform samplerBuffer equirect;
+// RGBA32F texels.
+#include "texel_buffer.glsl"
+layout(set = 0, binding = 0) uniform textureBuffer equirect;
 layout(std430, set = 0, binding = 1) buffer Cube { vec4 cube[]; };
 
 // Texels with sub-samples near a pixel edge, which equirect_to_cube_near.comp finishes in double

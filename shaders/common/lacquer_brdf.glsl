@@ -18,9 +18,9 @@
 // is the interval, with no check or search (llvmpipe runs a search loop's body at least once).
 layout(constant_id = 3) const bool FRESNEL_POW2_GRID = false;
 
-// Knots of the Fresnel table: (angle_deg, r, g, b), angles strictly increasing from 0 to 90. A
-// texel buffer: on llvmpipe a per-lane texel fetch costs far less than a per-lane SSBO load.
-layout(set = FRESNEL_SET, binding = FRESNEL_BINDING) uniform samplerBuffer fresnel_knots;
+// Knots of the Fresnel table: (angle_deg, r, g, b), angles strictly increasing from 0 to 90.
+#include "texel_buffer.glsl"
+layout(set = FRESNEL_SET, binding = FRESNEL_BINDING) uniform textureBuffer fresnel_knots;
 
 struct LacquerParams {
     float beckmann_m;

@@ -20,7 +20,8 @@
 
 // Per object, four vec4s: (m, a, b, g(r)), (k_d, knot count), (a_lo, b_lo, first knot, 0),
 // (β_normal, β_grazing, p, 0). Packed by shading::ObjectMaterial.
-layout(set = 0, binding = 4) uniform samplerBuffer object_material;
+#include "texel_buffer.glsl"
+layout(set = 0, binding = 4) uniform textureBuffer object_material;
 
 #include "gbuffer_samples.glsl"
 

@@ -38,6 +38,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Prefilter(args)) => prefilter(args),
         Some(Command::Fit(args)) => super::fit::run_fit(args),
         Some(Command::Synth(args)) => super::fit::run_synth(args),
+        Some(Command::Mesh(args)) => super::mesh_cmd::run_mesh(args),
     }
 }
 
@@ -88,9 +89,23 @@ fn camera_for(mesh: BuiltinMesh, args: &RenderArgs) -> Result<Camera> {
     Ok(camera)
 }
 
+/// The `--light` values: none given → the default rig; `none` alone → no lights; otherwise each
+/// parsed.
 fn lights_from(specs: &[String]) -> Result<Vec<Light>> {
     if specs.is_empty() {
         return Ok(default_lights());
+    }
+    let is_none = |s: &String| s.trim().eq_ignore_ascii_case("none");
+    if specs.iter().any(is_none) {
+        if specs.len() > 1 {
+            return Err(Error::invalid(
+                "--light",
+                specs.join(" "),
+                "`none` turns every light off and cannot be combined with other --light values; \
+                 give either --light none or only dir:/point: lights",
+            ));
+        }
+        return Ok(Vec::new());
     }
     if specs.len() > MAX_LIGHTS {
         return Err(Error::invalid(
@@ -99,7 +114,23 @@ fn lights_from(specs: &[String]) -> Result<Vec<Light>> {
             format!("at most {MAX_LIGHTS} lights"),
         ));
     }
-    specs.iter().map(|s| Light::parse(s)).collect()
+    specs
+        .iter()
+        .map(|s| {
+            Light::parse(s).map_err(|e| match e {
+                Error::InvalidParameter {
+                    field,
+                    value,
+                    reason,
+                } => Error::InvalidParameter {
+                    field,
+                    value,
+                    reason: format!("{reason}; or `--light none` (alone) for no lights"),
+                },
+                other => other,
+            })
+        })
+        .collect()
 }
 
 /// A failed render never leaves a file at the output path: a file there from an earlier run would
@@ -309,7 +340,8 @@ fn info() -> Result<()> {
          max uniform buffer:   {} bytes\n\
          max texel buffer:     {} texels\n\
          MSAA sample counts:   {:?}\n\
-         timestamps:           {} (period {} ns)\n",
+         timestamps:           {} (period {} ns)\n\
+         ray queries:          {}\n",
         i.name,
         i.device_type,
         i.driver_name,
@@ -333,6 +365,7 @@ fn info() -> Result<()> {
             "no"
         },
         i.timestamp_period_ns,
+        i.ray_query.summary(),
     );
     write_stdout(&text)
 }

@@ -8,6 +8,7 @@ mod bench;
 mod commands;
 mod directions;
 mod fit;
+mod mesh_cmd;
 mod scene_cmd;
 
 use clap::Parser;
@@ -20,10 +21,15 @@ pub use args::{parse_size, parse_vec3, Cli, Command};
 /// run starts without compiling shaders.
 pub(crate) struct CliGpu(crate::gpu::GpuContext);
 
+/// Opens the GPU; where ray queries are off, says so once on stderr (which feature is missing
+/// and what to install).
 pub(crate) fn open_gpu() -> crate::Result<CliGpu> {
-    Ok(CliGpu(crate::gpu::GpuContext::new(
-        &crate::gpu::ContextOptions::from_env(),
-    )?))
+    let gpu = crate::gpu::GpuContext::new(&crate::gpu::ContextOptions::from_env())?;
+    static RAY_QUERY_WARNING: std::sync::Once = std::sync::Once::new();
+    if let Some(warning) = gpu.info().ray_query.warning(&gpu.info().name) {
+        RAY_QUERY_WARNING.call_once(|| eprintln!("warning: {warning}"));
+    }
+    Ok(CliGpu(gpu))
 }
 
 impl std::ops::Deref for CliGpu {

@@ -27,7 +27,60 @@ pub struct AdapterInfo {
     pub shader_float64: bool,
     /// Identity of the driver's pipeline-cache format: (vendorID, deviceID, pipelineCacheUUID).
     pub pipeline_cache_id: (u32, u32, [u8; 16]),
+    /// Rays traced from shaders: available and enabled, turned off, or what the device lacks.
+    pub ray_query: RayQuery,
 }
+
+/// Ray queries from shaders (`VK_KHR_ray_query` over `VK_KHR_acceleration_structure`), which
+/// light between objects (SPEC §6) needs. Without them shikki renders every object as if alone.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RayQuery {
+    /// The extensions and features are present and enabled on the device.
+    Enabled,
+    /// Present, but turned off (`SHIKKI_RAY_QUERY=0`, [`ContextOptions`](super::ContextOptions)).
+    Disabled,
+    /// Not available on this device: what it lacks.
+    Missing(String),
+}
+
+impl RayQuery {
+    pub fn is_enabled(&self) -> bool {
+        *self == RayQuery::Enabled
+    }
+
+    /// One line for `shikki info`.
+    pub fn summary(&self) -> String {
+        match self {
+            RayQuery::Enabled => "yes".into(),
+            RayQuery::Disabled => "available, turned off (SHIKKI_RAY_QUERY=0)".into(),
+            RayQuery::Missing(what) => format!("no ({what})"),
+        }
+    }
+
+    /// What a program shows its user once when rays are off: which feature is missing and what
+    /// to install. `None` when ray queries are enabled.
+    pub fn warning(&self, device: &str) -> Option<String> {
+        match self {
+            RayQuery::Enabled => None,
+            RayQuery::Disabled => Some(format!(
+                "ray queries turned off by SHIKKI_RAY_QUERY=0 on {device}: objects are shaded \
+                 without light between them (no shadows or inter-reflections)"
+            )),
+            RayQuery::Missing(what) => Some(format!(
+                "{device} has no ray queries ({what}): objects are shaded without light between \
+                 them (no shadows or inter-reflections); install Mesa >= 24.1 lavapipe \
+                 (./scripts/setup does) or a GPU driver with VK_KHR_ray_query"
+            )),
+        }
+    }
+}
+
+/// The device extensions ray queries need, in the order they are enabled.
+pub(crate) const RAY_QUERY_EXTENSIONS: [&std::ffi::CStr; 3] = [
+    ash::khr::deferred_host_operations::NAME,
+    ash::khr::acceleration_structure::NAME,
+    ash::khr::ray_query::NAME,
+];
 
 pub(crate) struct ChosenAdapter {
     pub physical_device: vk::PhysicalDevice,
@@ -38,6 +91,7 @@ pub(crate) struct ChosenAdapter {
 pub(crate) fn choose_adapter(
     instance: &ash::Instance,
     wanted: Option<&str>,
+    ray_query_allowed: bool,
 ) -> Result<ChosenAdapter, GpuError> {
     // SAFETY: a plain query on a valid instance.
     let devices =
@@ -45,7 +99,7 @@ pub(crate) fn choose_adapter(
     let mut candidates = Vec::new();
     let mut rejected = Vec::new();
     for physical_device in devices {
-        let info = describe(instance, physical_device);
+        let info = describe(instance, physical_device, ray_query_allowed)?;
         match suitability(instance, physical_device) {
             Ok(queue_family) => candidates.push(ChosenAdapter {
                 physical_device,
@@ -117,7 +171,53 @@ fn suitability(instance: &ash::Instance, device: vk::PhysicalDevice) -> Result<u
         .ok_or_else(|| "no graphics+compute queue".to_string())
 }
 
-fn describe(instance: &ash::Instance, device: vk::PhysicalDevice) -> AdapterInfo {
+/// What the device lacks of the extensions and features ray queries need; `None` when nothing.
+fn ray_query_lack(
+    instance: &ash::Instance,
+    device: vk::PhysicalDevice,
+) -> Result<Option<String>, GpuError> {
+    // SAFETY: plain query on a valid physical device.
+    let extensions = unsafe { instance.enumerate_device_extension_properties(device) }
+        .during("vkEnumerateDeviceExtensionProperties")?;
+    let has = |name: &std::ffi::CStr| {
+        extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name))
+    };
+    let missing: Vec<String> = RAY_QUERY_EXTENSIONS
+        .iter()
+        .filter(|name| !has(name))
+        .map(|name| name.to_string_lossy().into_owned())
+        .collect();
+    if !missing.is_empty() {
+        return Ok(Some(format!("no {}", missing.join(", "))));
+    }
+    let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut acceleration = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
+    let mut ray_query = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+    let mut features = vk::PhysicalDeviceFeatures2::default()
+        .push_next(&mut features12)
+        .push_next(&mut acceleration)
+        .push_next(&mut ray_query);
+    // SAFETY: the chained structs live on this stack frame; their extensions are supported.
+    unsafe { instance.get_physical_device_features2(device, &mut features) };
+    let lacking: Vec<&str> = [
+        (features12.buffer_device_address, "bufferDeviceAddress"),
+        (acceleration.acceleration_structure, "accelerationStructure"),
+        (ray_query.ray_query, "rayQuery"),
+    ]
+    .iter()
+    .filter(|(value, _)| *value == vk::FALSE)
+    .map(|(_, name)| *name)
+    .collect();
+    Ok((!lacking.is_empty()).then(|| format!("feature {} not supported", lacking.join(", "))))
+}
+
+fn describe(
+    instance: &ash::Instance,
+    device: vk::PhysicalDevice,
+    ray_query_allowed: bool,
+) -> Result<AdapterInfo, GpuError> {
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
     let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
     // SAFETY: plain query; the chained struct lives on this stack frame.
@@ -137,7 +237,12 @@ fn describe(instance: &ash::Instance, device: vk::PhysicalDevice) -> AdapterInfo
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     let v = props.api_version;
-    AdapterInfo {
+    let ray_query = match ray_query_lack(instance, device)? {
+        None if ray_query_allowed => RayQuery::Enabled,
+        None => RayQuery::Disabled,
+        Some(what) => RayQuery::Missing(what),
+    };
+    Ok(AdapterInfo {
         name,
         device_type: super::conv::device_type_name(props.device_type).to_string(),
         driver_name,
@@ -165,5 +270,6 @@ fn describe(instance: &ash::Instance, device: vk::PhysicalDevice) -> AdapterInfo
             let features = unsafe { instance.get_physical_device_features(device) };
             features.shader_float64 == vk::TRUE
         },
-    }
+        ray_query,
+    })
 }

@@ -18,7 +18,7 @@ impl BufferUsage {
     pub const INDEX: Self = Self(vk::BufferUsageFlags::INDEX_BUFFER);
     pub const UNIFORM: Self = Self(vk::BufferUsageFlags::UNIFORM_BUFFER);
     pub const STORAGE: Self = Self(vk::BufferUsageFlags::STORAGE_BUFFER);
-    /// Read in shaders as a `samplerBuffer` of RGBA32F texels (`Resource::TexelBuffer`).
+    /// Read in shaders as a `textureBuffer` of RGBA32F texels (`Resource::TexelBuffer`).
     pub const UNIFORM_TEXEL: Self = Self(vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER);
     /// Holds the arguments of an indirect dispatch (`Recorder::dispatch_indirect`).
     pub const INDIRECT: Self = Self(vk::BufferUsageFlags::INDIRECT_BUFFER);

@@ -34,11 +34,15 @@ pub struct ContextOptions {
     /// A file holding the driver's pipeline cache, read at start and written by
     /// [`GpuContext::save_pipeline_cache`]: the second run starts without compiling shaders.
     pub pipeline_cache: Option<PathBuf>,
+    /// Leave ray queries off even where the device has them (`SHIKKI_RAY_QUERY=0`): the path of
+    /// a device without them, which tests keep covered.
+    pub no_ray_query: bool,
 }
 
 impl ContextOptions {
     /// `SHIKKI_VALIDATION=1` turns validation on (`SHIKKI_SYNC_VALIDATION=1` adds its
-    /// synchronisation checks); `SHIKKI_DEVICE=<substring>` picks the device.
+    /// synchronisation checks); `SHIKKI_DEVICE=<substring>` picks the device;
+    /// `SHIKKI_RAY_QUERY=0` leaves ray queries off.
     pub fn from_env() -> Self {
         Self {
             validation: std::env::var("SHIKKI_VALIDATION").is_ok_and(|v| v == "1"),
@@ -48,6 +52,7 @@ impl ContextOptions {
             synchronization_validation: std::env::var("SHIKKI_SYNC_VALIDATION")
                 .is_ok_and(|v| v == "1"),
             pipeline_cache: default_pipeline_cache(),
+            no_ray_query: std::env::var("SHIKKI_RAY_QUERY").is_ok_and(|v| v == "0"),
         }
     }
 }
@@ -108,6 +113,7 @@ impl GpuContext {
             options.validation,
             options.synchronization_validation,
             options.device_name.as_deref(),
+            !options.no_ray_query,
             |info| read_pipeline_cache(options.pipeline_cache.as_deref(), info),
         )?);
         // SAFETY: the queue family was chosen with one queue; index 0 exists.

@@ -2,7 +2,7 @@
 //! allocator. Resources hold an `Arc<DeviceShared>`, so the device outlives every buffer, image and
 //! pipeline made from it, and `Drop` tears down in reverse creation order.
 
-use super::adapter::{choose_adapter, AdapterInfo, ChosenAdapter};
+use super::adapter::{choose_adapter, AdapterInfo, ChosenAdapter, RAY_QUERY_EXTENSIONS};
 use super::debug::ValidationLog;
 use super::error::{GpuError, VkResultExt};
 use super::instance::{create_instance, InstanceParts};
@@ -28,12 +28,13 @@ impl DeviceShared {
         validation: bool,
         synchronization_validation: bool,
         device_name: Option<&str>,
+        ray_query_allowed: bool,
         cache_data: impl FnOnce(&AdapterInfo) -> Vec<u8>,
     ) -> Result<Self, GpuError> {
         let log = ValidationLog::default();
         let instance = create_instance(validation, synchronization_validation, &log)?;
         // `log` stays alive here until the instance (and its messenger) is gone on every path.
-        match create_device(&instance, device_name) {
+        match create_device(&instance, device_name, ray_query_allowed) {
             Ok((device, adapter, allocator)) => {
                 let initial = cache_data(&adapter.info);
                 let info = vk::PipelineCacheCreateInfo::default().initial_data(&initial);
@@ -103,8 +104,10 @@ impl Drop for DeviceShared {
 fn create_device(
     instance: &InstanceParts,
     device_name: Option<&str>,
+    ray_query_allowed: bool,
 ) -> Result<(ash::Device, ChosenAdapter, Allocator), GpuError> {
-    let adapter = choose_adapter(&instance.instance, device_name)?;
+    let adapter = choose_adapter(&instance.instance, device_name, ray_query_allowed)?;
+    let ray_query = adapter.info.ray_query.is_enabled();
     let priorities = [1.0f32];
     let queue_info = vk::DeviceQueueCreateInfo::default()
         .queue_family_index(adapter.queue_family)
@@ -114,10 +117,28 @@ fn create_device(
         .synchronization2(true);
     let features =
         vk::PhysicalDeviceFeatures::default().shader_float64(adapter.info.shader_float64);
-    let create_info = vk::DeviceCreateInfo::default()
+    // Ray queries: the KHR extension structs, not Vulkan 1.4 core ones (the validation layer
+    // 1.3.239 that Debian 12 ships rejects those).
+    let mut features12 = vk::PhysicalDeviceVulkan12Features::default().buffer_device_address(true);
+    let mut acceleration =
+        vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
+    let mut ray_query_features = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+    let extensions: Vec<*const std::ffi::c_char> = if ray_query {
+        RAY_QUERY_EXTENSIONS.iter().map(|e| e.as_ptr()).collect()
+    } else {
+        Vec::new()
+    };
+    let mut create_info = vk::DeviceCreateInfo::default()
         .queue_create_infos(std::slice::from_ref(&queue_info))
         .enabled_features(&features)
+        .enabled_extension_names(&extensions)
         .push_next(&mut features13);
+    if ray_query {
+        create_info = create_info
+            .push_next(&mut features12)
+            .push_next(&mut acceleration)
+            .push_next(&mut ray_query_features);
+    }
     // SAFETY: the physical device comes from this instance; create_info lives until return.
     let device = unsafe {
         instance
@@ -130,7 +151,8 @@ fn create_device(
         device: device.clone(),
         physical_device: adapter.physical_device,
         debug_settings: Default::default(),
-        buffer_device_address: false,
+        // Acceleration structures live in buffers addressed by device address.
+        buffer_device_address: ray_query,
         allocation_sizes: Default::default(),
     });
     match allocator {

@@ -18,7 +18,7 @@ pub enum BindingKind {
     StorageBuffer,
     SampledImage,
     StorageImage,
-    /// A `samplerBuffer` of RGBA32F texels: on llvmpipe a `texelFetch` gathers a whole texel per
+    /// A `textureBuffer` of RGBA32F texels: on llvmpipe a `texelFetch` gathers a whole texel per
     /// lane, where an SSBO load runs a scalar loop over the lanes for every component.
     UniformTexelBuffer,
 }

@@ -14,6 +14,8 @@ pub fn validated_gpu() -> GpuContext {
         // The layer's synchronisation checks too: every test also checks the barriers.
         synchronization_validation: true,
         pipeline_cache: None,
+        // `SHIKKI_RAY_QUERY=0` runs the suite as on a device without ray queries.
+        no_ray_query: std::env::var("SHIKKI_RAY_QUERY").is_ok_and(|v| v == "0"),
     };
     match GpuContext::new(&options) {
         Ok(gpu) => gpu,
