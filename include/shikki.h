@@ -53,6 +53,9 @@ typedef enum ShikkiStatus {
   SHIKKI_STATUS_PANIC = 8,
   // The call needs a part of shikki this build does not have.
   SHIKKI_STATUS_UNSUPPORTED = 9,
+  // shikki reached a state its own code should have made impossible: a bug to report, not a
+  // fault of the arguments.
+  SHIKKI_STATUS_INTERNAL = 10,
 } ShikkiStatus;
 
 // Tone curves of 8-bit and PNG output (SPEC §1); pass as `uint32_t`.
@@ -135,6 +138,10 @@ typedef struct ShikkiRendererOptions {
 typedef struct ShikkiRenderer {
   uint64_t id;
 } ShikkiRenderer;
+
+// Receives a renderer's warnings (`shikki_renderer_set_warning_callback`): `user_data` as given,
+// and one warning as a NUL-terminated UTF-8 sentence, valid only during the call.
+typedef void (*ShikkiWarningCallback)(void *user_data, const char *message);
 
 // Objects, lights, camera, environment, background and output settings of one picture. Threads:
 // changes to one scene are serialised; a render works on a snapshot taken when it starts (the
@@ -302,6 +309,27 @@ enum ShikkiStatus shikki_renderer_destroy(struct ShikkiRenderer renderer);
 // `count` is valid for one write.
 enum ShikkiStatus shikki_renderer_validation_message_count(struct ShikkiRenderer renderer, size_t *count);
 
+// Passes each warning of this renderer's renders (replaced environment pixels, an environment
+// cache file ignored or not written: nothing that stops a render) to `callback` with
+// `user_data`, on the rendering thread, before the render call returns and with the renderer
+// unlocked. NULL (the default) drops warnings: the library never prints.
+//
+// # Safety
+// Unless NULL, `callback` must be safe to call with `user_data` and a message from any thread
+// that renders with this renderer, until it is replaced or the renderer destroyed, and must
+// return normally (no `longjmp`, no C++ exception).
+enum ShikkiStatus shikki_renderer_set_warning_callback(struct ShikkiRenderer renderer, ShikkiWarningCallback callback, void *user_data);
+
+// Caches prefiltered environments in `directory` (created when first written): a later render
+// of the same map with the same intensity and rotation on the same kind of device, by any
+// renderer or process (the CLI's cache is `~/.cache/shikki/environments`), loads it instead of
+// prefiltering again. Files are named by a hash of the map's pixels and every parameter, and are
+// checked before use. NULL or "" (the default) turns the cache off.
+//
+// # Safety
+// `directory` is NULL or a NUL-terminated UTF-8 string.
+enum ShikkiStatus shikki_renderer_set_environment_cache(struct ShikkiRenderer renderer, const char *directory);
+
 // Renders into `rgba` (linear radiance, RGBA32F, alpha = coverage, colour premultiplied by it,
 // row 0 at the top); `len` must be width × height × 4 floats.
 //
@@ -331,7 +359,9 @@ enum ShikkiStatus shikki_render_to_file(struct ShikkiRenderer renderer, struct S
 // `rgba` is valid for reads of `len` floats; `path` is a NUL-terminated UTF-8 string.
 enum ShikkiStatus shikki_image_write(const float *rgba, size_t len, uint32_t width, uint32_t height, float exposure_ev, uint32_t tone_curve, const char *path);
 
-// An empty scene (see `SceneState::default`): add objects, lights, an environment.
+// An empty scene: no objects, no lights, no environment, the default camera, 1024×1024 with 4
+// samples, ACES at 0 EV and the environment as background (black without one) — the scene-file
+// defaults. Add objects, lights, an environment.
 //
 // # Safety
 // `out` is valid for one write.

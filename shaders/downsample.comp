@@ -2,18 +2,20 @@
 // Step 2: one level of the source mip chain, face M → M/2; each parent is the solid-angle
 // weighted mean of its 2×2 children. CPU twin: environment::oracle::downsample.
 
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#include "interface.glsl"
+
+layout(local_size_x = PREFILTER_WORKGROUP, local_size_y = PREFILTER_WORKGROUP, local_size_z = 1) in;
 
 #include "cubemap.glsl"
 
-layout(push_constant) uniform Params {
-    uint dst_face_size;
-} params;
+layout(push_constant) uniform PushConstants {
+    DownsampleParams params;
+};
 
 // RGBA32F texels.
 #include "texel_buffer.glsl"
-layout(set = 0, binding = 0) uniform textureBuffer src;
-layout(std430, set = 0, binding = 1) writeonly buffer Dest { vec4 dst[]; };
+layout(set = 0, binding = PREFILTER_SOURCE_BINDING) uniform textureBuffer src;
+layout(std430, set = 0, binding = PREFILTER_DEST_BINDING) writeonly buffer Dest { vec4 dst[]; };
 
 void main() {
     uvec3 id = gl_GlobalInvocationID;

@@ -6,21 +6,23 @@
 // Texels with n·s ≤ 0 add exactly zero, so each row visits only the columns on the lit side of
 // the plane n·p = 0 (plus a texel of margin; max(·, 0) still decides): on row tc of a face the
 // centres p(sc) = axis + tc·t_dir + sc·s_dir have n·p linear in sc, a half-line. Each visit
-// computes n·ŝ·dω = n·p·(2/M)²/|p|⁴ from p (as texel_direction does), cheaper on lavapipe than
-// loading precomputed directions.
+// computes n·ŝ·dω = n·p·(2/M)²/|p|⁴ from p (as texel_direction does), cheaper than loading
+// precomputed directions (quirk `ssbo_gather_is_per_lane`).
 
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#include "interface.glsl"
+
+layout(local_size_x = PREFILTER_WORKGROUP, local_size_y = PREFILTER_WORKGROUP, local_size_z = 1) in;
 
 #include "cubemap.glsl"
 
-layout(push_constant) uniform Params {
-    uint face_size;
-} params;
+layout(push_constant) uniform PushConstants {
+    IrradianceParams params;
+};
 
 // RGBA32F texels.
 #include "texel_buffer.glsl"
-layout(set = 0, binding = 0) uniform textureBuffer src;
-layout(std430, set = 0, binding = 1) writeonly buffer Dest { vec4 dst[]; };
+layout(set = 0, binding = PREFILTER_SOURCE_BINDING) uniform textureBuffer src;
+layout(std430, set = 0, binding = PREFILTER_DEST_BINDING) writeonly buffer Dest { vec4 dst[]; };
 
 void main() {
     uvec3 id = gl_GlobalInvocationID;
@@ -36,8 +38,8 @@ void main() {
     float h2 = h * h;
     vec3 sum = vec3(0.0);
     float weight = 0.0;
-    // Loop trip counts: 6, then n ≤ IRRADIANCE_FACE = 32 (params.rs bounds 6·n² below lavapipe's
-    // 65535).
+    // Loop trip counts: 6, then n ≤ IRRADIANCE_FACE (params.rs bounds 6·n² below the quirk
+    // `loop_iteration_limit`).
     for (int f = 0; f < 6; ++f) {
         vec3 axis, s_dir, t_dir;
         face_frame(f, axis, s_dir, t_dir);

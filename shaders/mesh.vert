@@ -1,8 +1,10 @@
 #version 450
+// The meshes' vertices (GpuMesh's interleaved buffer) through the camera; the position and normal
+// go on to the fragment shader, interpolated.
 #include "frame.glsl"
 
-layout(location = 0) in vec3 in_position;
-layout(location = 1) in vec3 in_normal;
+layout(location = VERTEX_POSITION_LOCATION) in vec3 in_position;
+layout(location = VERTEX_NORMAL_LOCATION) in vec3 in_normal;
 
 layout(location = 0) out vec3 out_position;
 layout(location = 1) out vec3 out_normal;

@@ -6,24 +6,24 @@
 // faces and rows of a conservative bounding box of the cone, and in each row the span of the cone
 // (`row_span`) — so the result is the full sum. CPU twin: environment::oracle::blur_layer.
 //
-// Texel directions and solid angles are computed per visit from the row's base point: measured on
-// lavapipe, that is faster than reading them from a precomputed table, whose per-lane loads
-// (gathers) cost more than the dozen vector instructions they replace.
+// Texel directions and solid angles are computed per visit from the row's base point: faster
+// than reading them from a precomputed table, whose per-lane loads (gathers) cost more than the
+// dozen vector instructions they replace (quirk `ssbo_gather_is_per_lane`).
 
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#include "interface.glsl"
+
+layout(local_size_x = PREFILTER_WORKGROUP, local_size_y = PREFILTER_WORKGROUP, local_size_z = 1) in;
 
 #include "cubemap.glsl"
 
-layout(push_constant) uniform Params {
-    uint face_size;
-    float beta;
-    float cutoff;   // LOBE_CUTOFF: skip q > cutoff·β²
-} params;
+layout(push_constant) uniform PushConstants {
+    BlurLayerParams params;
+};
 
 // RGBA32F texels.
 #include "texel_buffer.glsl"
-layout(set = 0, binding = 0) uniform textureBuffer src;
-layout(std430, set = 0, binding = 1) writeonly buffer Dest { vec4 dst[]; };
+layout(set = 0, binding = PREFILTER_SOURCE_BINDING) uniform textureBuffer src;
+layout(std430, set = 0, binding = PREFILTER_DEST_BINDING) writeonly buffer Dest { vec4 dst[]; };
 
 const float FACE_CORNER_ANGLE = 0.9553166 + 1e-3;
 
@@ -38,8 +38,7 @@ vec2 cos_range(float cos_dx, float theta_c) {
 // sc = e·S/e·A: with e·S ∈ [s0, s1] and e·A ∈ [a0, a1] (a0 > 0) the quotient's extremes are at
 // the interval ends. Widened by a texel for rounding; the full face when the cone reaches the
 // face plane's horizon (e·A ≤ 0 possible). Faces the cone cannot reach are skipped outright: that
-// is not only faster but necessary on lavapipe, whose loop limiter ends any loop after 65535
-// iterations per invocation (see gpu/mod.rs, driver quirks).
+// is not only faster but necessary under the quirk `loop_iteration_limit`.
 void face_window(int face, vec3 d, float theta_c, uint n, out ivec2 lo, out ivec2 hi) {
     vec3 axis, s_dir, t_dir;
     face_frame(face, axis, s_dir, t_dir);
@@ -139,10 +138,9 @@ void main() {
         face_window(f, d, theta_c, n, lo, hi);
         vec3 axis, s_dir, t_dir;
         face_frame(f, axis, s_dir, t_dir);
-        // lavapipe's loop limiter (65535; see gpu/mod.rs) — bounded here in total, as params.rs
-        // does for the irradiance: the plan's face sizes (layer_face_size) keep the cone within
-        // ~10 texels of d — a few hundred visits — or make the cube 16² (6·16² = 1536 texels)
-        // for wide lobes.
+        // Quirk `loop_iteration_limit`, bounded here in total as params.rs does for the
+        // irradiance: the plan's face sizes (layer_face_size) keep the cone within ~10 texels of
+        // d — a few hundred visits — or make the cube 16² (6·16² = 1536 texels) for wide lobes.
         for (int j = lo.y; j <= hi.y; ++j) {
             ivec2 span = q_max >= 1.0
                 ? ivec2(lo.x, hi.x)

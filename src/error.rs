@@ -1,5 +1,9 @@
-//! The crate's error type. Every message names what was wrong, where, and what is valid, so a
-//! user can fix the input without reading the source.
+//! The crate's error and warning types. Every message names what was wrong, where, and what is
+//! valid, so a user can fix the input without reading the source.
+//!
+//! The library never prints: a [`Warning`] (something the user should know that did not stop the
+//! work) is returned to the caller, which decides where it goes — the CLI prints `warning: …` on
+//! stderr, the C API hands it to the callback a program set.
 
 use std::path::PathBuf;
 
@@ -34,6 +38,9 @@ pub enum Error {
     /// Vulkan: no loader, no device, a failed call or validation messages.
     #[error(transparent)]
     Gpu(#[from] crate::gpu::GpuError),
+    /// A bug in shikki, not in the input: a state the code should have made impossible.
+    #[error("internal error (a bug in shikki; please report it): {0}")]
+    Internal(String),
 }
 
 /// `Result` with [`Error`] as the default error.
@@ -59,6 +66,45 @@ impl Error {
             file: file.into(),
             line,
             message: message.into(),
+        }
+    }
+}
+
+/// Something a caller should know that did not stop the work. Its `Display` is the sentence the
+/// CLI prints after `warning: `.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Warning {
+    /// Pixel values of an environment map that were NaN, infinite or negative, now 0.
+    ReplacedPixels { environment: String, count: usize },
+    /// An environment cache file failed a check and was ignored; the next prefilter rewrites it.
+    CacheFileInvalid { path: PathBuf, reason: String },
+    /// An environment cache file was valid but could not be put on the device.
+    CacheFileNotUploaded { path: PathBuf, reason: String },
+    /// The prefiltered environment could not be stored in the cache (the render went on).
+    CacheNotWritten { reason: String },
+}
+
+impl std::fmt::Display for Warning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Warning::ReplacedPixels { environment, count } => write!(
+                f,
+                "{environment}: {count} pixel value(s) were NaN, infinite or negative and were \
+                 replaced by 0"
+            ),
+            Warning::CacheFileInvalid { path, reason } => write!(
+                f,
+                "ignoring the environment cache file {}: {reason}; it will be rebuilt",
+                path.display()
+            ),
+            Warning::CacheFileNotUploaded { path, reason } => write!(
+                f,
+                "ignoring the environment cache file {}: {reason}",
+                path.display()
+            ),
+            Warning::CacheNotWritten { reason } => {
+                write!(f, "the prefiltered environment was not cached: {reason}")
+            }
         }
     }
 }

@@ -29,6 +29,6 @@ pub mod oracle;
 pub mod output;
 pub mod raster;
 pub mod scene;
-pub mod shading;
+pub mod text;
 
-pub use error::{Error, Result};
+pub use error::{Error, Result, Warning};

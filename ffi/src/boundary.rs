@@ -37,6 +37,7 @@ impl From<shikki::Error> for FfiError {
             shikki::Error::Parse { .. } => ShikkiStatus::ParseError,
             shikki::Error::Read { .. } | shikki::Error::Write { .. } => ShikkiStatus::IoError,
             shikki::Error::Gpu(_) => ShikkiStatus::GpuError,
+            shikki::Error::Internal(_) => ShikkiStatus::Internal,
         };
         Self::new(status, error.to_string())
     }
@@ -66,9 +67,9 @@ fn set_last_error(message: &str) {
 
 /// Runs `body` with unwinding caught: Ok → `SHIKKI_STATUS_OK` and an empty last error; Err →
 /// its status and message; a panic → `SHIKKI_STATUS_PANIC` and the panic text. Nothing unwinds
-/// into C.
+/// into C. The last error is set when the body is done, so a call the body made back into the
+/// library (a warning callback's) cannot leave its own message behind.
 pub fn run(body: impl FnOnce() -> FfiResult) -> ShikkiStatus {
-    set_last_error("");
     let outcome = catch_unwind(AssertUnwindSafe(body)).unwrap_or_else(|payload| {
         let text = payload
             .downcast_ref::<&str>()
@@ -81,7 +82,10 @@ pub fn run(body: impl FnOnce() -> FfiResult) -> ShikkiStatus {
         ))
     });
     match outcome {
-        Ok(()) => ShikkiStatus::Ok,
+        Ok(()) => {
+            set_last_error("");
+            ShikkiStatus::Ok
+        }
         Err(error) => {
             let message = if error.message.is_empty() {
                 format!("{:?}", error.status)

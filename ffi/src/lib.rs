@@ -40,7 +40,7 @@ mod status;
 use std::ffi::c_char;
 
 pub use handles::{ShikkiEnvironment, ShikkiMaterial, ShikkiMesh, ShikkiRenderer, ShikkiScene};
-pub use renderer::ShikkiRendererOptions;
+pub use renderer::{ShikkiRendererOptions, ShikkiWarningCallback};
 pub use status::ShikkiStatus;
 
 /// Tone curves of 8-bit and PNG output (SPEC §1); pass as `uint32_t`.

@@ -1,11 +1,13 @@
 //! Material handles: a preset, a TOML text or file, and a setter for every SPEC field. Setters
-//! go through `LacquerMaterial::set`, so the C API checks each field exactly as the CLI and
-//! material files do; rules that tie fields together (r within [1, r*]) are checked by
-//! `shikki_material_validate` and when a scene is rendered.
+//! go through `LacquerMaterial::set` (text) or `set_value` (typed: a double stays a double), so
+//! the C API checks each field exactly as the CLI and scene files do; rules that tie fields
+//! together (r within [1, r*]) are checked by `shikki_material_validate` and when a scene is
+//! rendered.
 
 use std::ffi::c_char;
 use std::path::Path;
 
+use shikki::model::material::MaterialValue;
 use shikki::model::material_file::{load_material_file, material_from_toml_str};
 use shikki::model::LacquerMaterial;
 
@@ -89,6 +91,13 @@ fn set(material: ShikkiMaterial, key: &str, value: &str) -> FfiResult {
     Ok(())
 }
 
+fn set_value(material: ShikkiMaterial, key: &str, value: MaterialValue) -> FfiResult {
+    let object = handles::get::<_, LacquerMaterial>(material)?;
+    let mut material = handles::lock(&object)?;
+    material.set_value(key, value)?;
+    Ok(())
+}
+
 /// Sets one field by its text key (the keys of material files: m, a, b, c0, c1, c2, r, kd,
 /// extrapolate_g, ior_a, ior_b, fresnel, beta_normal, beta_grazing, beta_power). On error the
 /// material is unchanged.
@@ -110,16 +119,13 @@ pub unsafe extern "C" fn shikki_material_set(
     })
 }
 
-// Rust prints an f64 so that it parses back to the same bits, so a typed setter that goes
-// through the text key loses nothing and checks exactly what `LacquerMaterial::set` checks.
-
 /// Beckmann RMS slope m, in (0, 1].
 #[no_mangle]
 pub extern "C" fn shikki_material_set_beckmann_m(
     material: ShikkiMaterial,
     value: f64,
 ) -> ShikkiStatus {
-    ffi_boundary!({ set(material, "m", &value.to_string()) })
+    ffi_boundary!({ set_value(material, "m", MaterialValue::Number(value)) })
 }
 
 /// a of f(N·V) = a + b·N·V.
@@ -128,7 +134,7 @@ pub extern "C" fn shikki_material_set_diffuse_a(
     material: ShikkiMaterial,
     value: f64,
 ) -> ShikkiStatus {
-    ffi_boundary!({ set(material, "a", &value.to_string()) })
+    ffi_boundary!({ set_value(material, "a", MaterialValue::Number(value)) })
 }
 
 /// b of f(N·V) = a + b·N·V.
@@ -137,7 +143,7 @@ pub extern "C" fn shikki_material_set_diffuse_b(
     material: ShikkiMaterial,
     value: f64,
 ) -> ShikkiStatus {
-    ffi_boundary!({ set(material, "b", &value.to_string()) })
+    ffi_boundary!({ set_value(material, "b", MaterialValue::Number(value)) })
 }
 
 /// r, the lacquer : colorant ratio, in [1, r*] unless extrapolate_g.
@@ -146,19 +152,19 @@ pub extern "C" fn shikki_material_set_lacquer_ratio(
     material: ShikkiMaterial,
     value: f64,
 ) -> ShikkiStatus {
-    ffi_boundary!({ set(material, "r", &value.to_string()) })
+    ffi_boundary!({ set_value(material, "r", MaterialValue::Number(value)) })
 }
 
 /// A of the lacquer's n(λ) = A + B/λ².
 #[no_mangle]
 pub extern "C" fn shikki_material_set_ior_a(material: ShikkiMaterial, value: f64) -> ShikkiStatus {
-    ffi_boundary!({ set(material, "ior_a", &value.to_string()) })
+    ffi_boundary!({ set_value(material, "ior_a", MaterialValue::Number(value)) })
 }
 
 /// B of n(λ) = A + B/λ², in µm².
 #[no_mangle]
 pub extern "C" fn shikki_material_set_ior_b(material: ShikkiMaterial, value: f64) -> ShikkiStatus {
-    ffi_boundary!({ set(material, "ior_b", &value.to_string()) })
+    ffi_boundary!({ set_value(material, "ior_b", MaterialValue::Number(value)) })
 }
 
 /// β of the environment blur at normal view (> 0).
@@ -167,7 +173,7 @@ pub extern "C" fn shikki_material_set_beta_normal(
     material: ShikkiMaterial,
     value: f64,
 ) -> ShikkiStatus {
-    ffi_boundary!({ set(material, "beta_normal", &value.to_string()) })
+    ffi_boundary!({ set_value(material, "beta_normal", MaterialValue::Number(value)) })
 }
 
 /// β of the environment blur at grazing view (> 0).
@@ -176,7 +182,7 @@ pub extern "C" fn shikki_material_set_beta_grazing(
     material: ShikkiMaterial,
     value: f64,
 ) -> ShikkiStatus {
-    ffi_boundary!({ set(material, "beta_grazing", &value.to_string()) })
+    ffi_boundary!({ set_value(material, "beta_grazing", MaterialValue::Number(value)) })
 }
 
 /// p of β(nv) = β_grazing + (β_normal − β_grazing)·nv^p (> 0).
@@ -185,7 +191,7 @@ pub extern "C" fn shikki_material_set_beta_power(
     material: ShikkiMaterial,
     value: f64,
 ) -> ShikkiStatus {
-    ffi_boundary!({ set(material, "beta_power", &value.to_string()) })
+    ffi_boundary!({ set_value(material, "beta_power", MaterialValue::Number(value)) })
 }
 
 /// g(r) = c0 + c1·r + c2·r². All three are set, or none (on error).
@@ -200,9 +206,9 @@ pub extern "C" fn shikki_material_set_lacquer_law(
         let object = handles::get::<_, LacquerMaterial>(material)?;
         let mut material = handles::lock(&object)?;
         let mut updated = material.clone();
-        updated.set("c0", &c0.to_string())?;
-        updated.set("c1", &c1.to_string())?;
-        updated.set("c2", &c2.to_string())?;
+        updated.set_value("c0", MaterialValue::Number(c0))?;
+        updated.set_value("c1", MaterialValue::Number(c1))?;
+        updated.set_value("c2", MaterialValue::Number(c2))?;
         *material = updated;
         Ok(())
     })
@@ -216,7 +222,7 @@ pub extern "C" fn shikki_material_set_albedo(
     g: f64,
     b: f64,
 ) -> ShikkiStatus {
-    ffi_boundary!({ set(material, "kd", &format!("{r},{g},{b}")) })
+    ffi_boundary!({ set_value(material, "kd", MaterialValue::Rgb([r, g, b])) })
 }
 
 /// Allow r outside the fitted domain [1, r*] of g.
@@ -225,7 +231,7 @@ pub extern "C" fn shikki_material_set_extrapolate_g(
     material: ShikkiMaterial,
     extrapolate: bool,
 ) -> ShikkiStatus {
-    ffi_boundary!({ set(material, "extrapolate_g", &extrapolate.to_string()) })
+    ffi_boundary!({ set_value(material, "extrapolate_g", MaterialValue::Bool(extrapolate)) })
 }
 
 /// A Fresnel CSV (RGB or spectral, SPEC §3); NULL or "" returns to the dielectric table.

@@ -1,13 +1,13 @@
 //! Environment and mesh handles: made from files or caller arrays, immutable afterwards.
-//! The environment stays on the CPU here; each renderer prefilters it on first use
-//! (`renderer.rs`), since GPU images belong to one device.
+//! The environment stays on the CPU here; each renderer prepares it on first use (the core's
+//! `environment::prepare`, as for the CLI), since GPU images belong to one device.
 
 use std::ffi::c_char;
 use std::path::Path;
 use std::sync::Arc;
 
 use shikki::environment::load::{MAX_PIXELS, MAX_SIDE};
-use shikki::environment::{load_environment, Equirect};
+use shikki::environment::{load_environment, Equirect, LoadedEnvironment};
 use shikki::raster::mesh_io::{angle_weighted_normals, load_mesh, MAX_TRIANGLES, MAX_VERTICES};
 use shikki::raster::{BuiltinMesh, Mesh};
 
@@ -15,8 +15,9 @@ use crate::boundary::{c_str, check_out, ffi_boundary, slice, write_out, FfiError
 use crate::handles::{self, ShikkiEnvironment, ShikkiMesh};
 use crate::status::ShikkiStatus;
 
-/// An environment handle's object: the radiance map, shared with the scenes that use it.
-pub type EnvironmentObject = Arc<Equirect>;
+/// An environment handle's object: the radiance map as loaded (with how many pixels were
+/// replaced, which the renderer reports as a warning), shared with the scenes that use it.
+pub type EnvironmentObject = Arc<LoadedEnvironment>;
 /// A mesh handle's object, shared with the scenes that use it.
 pub type MeshObject = Arc<Mesh>;
 
@@ -34,7 +35,7 @@ pub unsafe extern "C" fn shikki_environment_load(
         // SAFETY: the caller's contract above.
         let path = unsafe { c_str(path, "path") }?;
         let loaded = load_environment(path)?;
-        let handle = handles::insert::<ShikkiEnvironment, _>(Arc::new(loaded.image));
+        let handle = handles::insert::<ShikkiEnvironment, _>(Arc::new(loaded));
         // SAFETY: checked non-NULL; valid for one write by contract.
         unsafe { write_out(out, "out", handle) }
     })
@@ -77,12 +78,16 @@ pub unsafe extern "C" fn shikki_environment_create_rgb(
             )));
         }
         let pixels = data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-        let image = Equirect {
-            width,
-            height,
-            pixels,
+        let loaded = LoadedEnvironment {
+            image: Equirect {
+                width,
+                height,
+                pixels,
+            },
+            replaced_pixels: 0,
+            source: format!("the {width}×{height} environment from shikki_environment_create_rgb"),
         };
-        let handle = handles::insert::<ShikkiEnvironment, _>(Arc::new(image));
+        let handle = handles::insert::<ShikkiEnvironment, _>(Arc::new(loaded));
         // SAFETY: checked non-NULL; valid for one write by contract.
         unsafe { write_out(out, "out", handle) }
     })

@@ -1,26 +1,24 @@
-//! Renderer handles and the render calls. A renderer owns one Vulkan device (`GpuContext`), the
-//! lacquer pipelines, and the prefiltered environment it used last (GPU images belong to one
-//! device, so environments are prefiltered here, with the parameters the CLI and the scene
-//! renderer use: `PrefilterParams::for_source_width`).
+//! Renderer handles and the render calls. A renderer owns one Vulkan device (`GpuContext`) and
+//! the core's `SceneRenderer` — the one renderer the CLI, scene files and batches use — so a C
+//! caller gets the CLI's pixels, environment preparation included (prefilter parameters clamped
+//! to the device, the disk cache once a directory is set). Unlike the CLI's it keeps one
+//! prefiltered environment at a time (environments can be large), collects validation messages
+//! instead of failing on them, and hands warnings to the program's callback instead of printing.
 
-use std::ffi::c_char;
+use std::ffi::{c_char, c_void, CString};
 use std::path::Path;
-use std::sync::Arc;
 
-use shikki::environment::gpu::{GpuEnvironment, GpuPrefilter};
-use shikki::environment::params::ViewBlur;
-use shikki::environment::{Equirect, PrefilterParams};
+use shikki::environment::disk_cache::EnvironmentDiskCache;
 use shikki::gpu::{ContextOptions, GpuContext};
 use shikki::output::{self, HdrImage, PngSettings};
-use shikki::raster::draw::{DrawObject, DrawScene, LacquerRenderer, RenderSettings};
-use shikki::raster::mesh_io::transform_mesh;
-use shikki::raster::Mesh;
+use shikki::scene::{Scene, SceneRenderer};
+use shikki::Warning;
 
 use crate::boundary::{
     c_str, check_out, ffi_boundary, opt_c_str, slice, slice_mut, write_out, FfiError, FfiResult,
 };
 use crate::handles::{self, ShikkiRenderer, ShikkiScene};
-use crate::scene::{check_image_size, tone_curve_from_c, SceneState};
+use crate::scene::{check_image_size, tone_curve_from_c};
 use crate::status::ShikkiStatus;
 
 /// Options of `shikki_renderer_create`.
@@ -35,120 +33,66 @@ pub struct ShikkiRendererOptions {
     pub validation: bool,
 }
 
-struct CachedEnvironment {
-    source: Arc<Equirect>,
-    intensity: f64,
-    rotation_deg: f64,
-    prefiltered: GpuEnvironment,
+/// Receives a renderer's warnings (`shikki_renderer_set_warning_callback`): `user_data` as given,
+/// and one warning as a NUL-terminated UTF-8 sentence, valid only during the call.
+pub type ShikkiWarningCallback =
+    Option<unsafe extern "C" fn(user_data: *mut c_void, message: *const c_char)>;
+
+/// A program's warning callback and its pointer.
+#[derive(Clone, Copy)]
+struct WarningSink {
+    callback: unsafe extern "C" fn(*mut c_void, *const c_char),
+    user_data: *mut c_void,
+}
+
+// SAFETY: `user_data` is never dereferenced here, only handed back to the program's own
+// callback, which the contract of `shikki_renderer_set_warning_callback` lets us call from any
+// thread that renders with the renderer.
+unsafe impl Send for WarningSink {}
+
+impl WarningSink {
+    fn deliver(self, warning: &Warning) {
+        // Our sentences hold no NUL; a path quoted in one might.
+        let text = CString::new(warning.to_string().replace('\0', "\\0")).unwrap_or_default();
+        // SAFETY: the program's callback with its own pointer, as its contract allows; `text` is
+        // NUL-terminated and outlives the call.
+        unsafe { (self.callback)(self.user_data, text.as_ptr()) };
+    }
 }
 
 /// A renderer handle's object. Field order is drop order: every GPU object before the context.
 pub struct RendererState {
-    environment: Option<CachedEnvironment>,
-    renderer: LacquerRenderer,
+    renderer: SceneRenderer,
     validation_messages: Vec<String>,
+    warning_sink: Option<WarningSink>,
     gpu: GpuContext,
 }
 
 impl RendererState {
     pub fn new(options: &ContextOptions) -> FfiResult<Self> {
+        let gpu = GpuContext::new(options).map_err(shikki::Error::from)?;
+        let mut renderer = SceneRenderer::with_disk_cache(None);
+        renderer.set_environment_capacity(1);
+        renderer.set_validation_fails_render(false);
         Ok(RendererState {
-            environment: None,
-            renderer: LacquerRenderer::new(),
+            renderer,
             validation_messages: Vec::new(),
-            gpu: GpuContext::new(options).map_err(shikki::Error::from)?,
+            warning_sink: None,
+            gpu,
         })
     }
 
-    /// The scene's environment prefiltered on this device; reuses the last one when the scene
-    /// names the same map, intensity and rotation. Takes the fields it needs, not `self`, so the
-    /// result can be borrowed alongside the renderer.
-    fn prefiltered<'a>(
-        cache: &'a mut Option<CachedEnvironment>,
-        gpu: &GpuContext,
-        scene: &SceneState,
-    ) -> FfiResult<Option<&'a GpuEnvironment>> {
-        let Some(wanted) = &scene.environment else {
-            return Ok(None);
-        };
-        let hit = cache.as_ref().is_some_and(|c| {
-            Arc::ptr_eq(&c.source, &wanted.image)
-                && c.intensity == wanted.intensity
-                && c.rotation_deg == wanted.rotation_deg
-        });
-        if !hit {
-            // Free the old images before making new ones: environments can be large.
-            *cache = None;
-            let params = PrefilterParams::for_source_width(wanted.image.width);
-            let prefiltered = GpuPrefilter::new(gpu)?.run(
-                gpu,
-                &wanted.image,
-                &params,
-                wanted.intensity,
-                wanted.rotation_deg,
-            )?;
-            *cache = Some(CachedEnvironment {
-                source: Arc::clone(&wanted.image),
-                intensity: wanted.intensity,
-                rotation_deg: wanted.rotation_deg,
-                prefiltered,
-            });
-        }
-        Ok(cache.as_ref().map(|c| &c.prefiltered))
+    /// Renders `scene` to linear radiance (premultiplied by coverage, row 0 at the top).
+    fn render(&mut self, scene: &Scene) -> FfiResult<HdrImage> {
+        let image = self.renderer.render(&self.gpu, scene);
+        // Collected after failures too: a validation message often explains one.
+        self.collect_validation_messages();
+        Ok(image?)
     }
 
-    /// Renders `scene` to linear radiance (premultiplied by coverage, row 0 at the top).
-    pub fn render(&mut self, scene: &SceneState) -> FfiResult<HdrImage> {
-        let materials = scene
-            .objects
-            .iter()
-            .map(|o| Ok((o.material.brdf_params()?, o.material.fresnel_table()?)))
-            .collect::<FfiResult<Vec<_>>>()?;
-        let placed: Vec<Arc<Mesh>> = scene
-            .objects
-            .iter()
-            .map(|o| {
-                if o.transform == glam::DMat4::IDENTITY {
-                    Ok(Arc::clone(&o.mesh))
-                } else {
-                    let placed = transform_mesh(&o.mesh, o.transform);
-                    placed.validate()?;
-                    Ok(Arc::new(placed))
-                }
-            })
-            .collect::<FfiResult<Vec<_>>>()?;
-        let objects: Vec<DrawObject<'_>> = scene
-            .objects
-            .iter()
-            .zip(&placed)
-            .zip(&materials)
-            .map(|((object, mesh), (brdf, fresnel))| DrawObject {
-                mesh,
-                brdf,
-                fresnel,
-                view_blur: ViewBlur::of(&object.material),
-            })
-            .collect();
-        let settings = RenderSettings {
-            width: scene.width,
-            height: scene.height,
-            samples: scene.samples,
-        };
-        let image =
-            Self::prefiltered(&mut self.environment, &self.gpu, scene).and_then(|environment| {
-                let draw = DrawScene {
-                    objects: &objects,
-                    camera: &scene.camera,
-                    lights: &scene.lights,
-                    environment,
-                    background: scene.background,
-                };
-                Ok(self.renderer.render(&self.gpu, &draw, &settings)?)
-            });
-        // Collected after failures too: a validation message often explains one.
-        self.validation_messages
-            .extend(self.gpu.take_validation_messages());
-        image
+    fn collect_validation_messages(&mut self) {
+        let fresh = self.gpu.take_validation_messages();
+        self.validation_messages.extend(fresh);
     }
 }
 
@@ -209,11 +153,62 @@ pub unsafe extern "C" fn shikki_renderer_validation_message_count(
         check_out(count, "count")?;
         let object = handles::get::<_, RendererState>(renderer)?;
         let mut state = handles::lock(&object)?;
-        let fresh = state.gpu.take_validation_messages();
-        state.validation_messages.extend(fresh);
+        state.collect_validation_messages();
         let n = state.validation_messages.len();
         // SAFETY: checked non-NULL; writable by contract.
         unsafe { write_out(count, "count", n) }
+    })
+}
+
+/// Passes each warning of this renderer's renders (replaced environment pixels, an environment
+/// cache file ignored or not written: nothing that stops a render) to `callback` with
+/// `user_data`, on the rendering thread, before the render call returns and with the renderer
+/// unlocked. NULL (the default) drops warnings: the library never prints.
+///
+/// # Safety
+/// Unless NULL, `callback` must be safe to call with `user_data` and a message from any thread
+/// that renders with this renderer, until it is replaced or the renderer destroyed, and must
+/// return normally (no `longjmp`, no C++ exception).
+#[no_mangle]
+pub unsafe extern "C" fn shikki_renderer_set_warning_callback(
+    renderer: ShikkiRenderer,
+    callback: ShikkiWarningCallback,
+    user_data: *mut c_void,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        let object = handles::get::<_, RendererState>(renderer)?;
+        let mut state = handles::lock(&object)?;
+        state.warning_sink = callback.map(|callback| WarningSink {
+            callback,
+            user_data,
+        });
+        Ok(())
+    })
+}
+
+/// Caches prefiltered environments in `directory` (created when first written): a later render
+/// of the same map with the same intensity and rotation on the same kind of device, by any
+/// renderer or process (the CLI's cache is `~/.cache/shikki/environments`), loads it instead of
+/// prefiltering again. Files are named by a hash of the map's pixels and every parameter, and are
+/// checked before use. NULL or "" (the default) turns the cache off.
+///
+/// # Safety
+/// `directory` is NULL or a NUL-terminated UTF-8 string.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_renderer_set_environment_cache(
+    renderer: ShikkiRenderer,
+    directory: *const c_char,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        // SAFETY: the caller's contract above.
+        let directory = unsafe { opt_c_str(directory, "directory") }?;
+        let cache = directory
+            .filter(|d| !d.is_empty())
+            .map(EnvironmentDiskCache::new);
+        let object = handles::get::<_, RendererState>(renderer)?;
+        let mut state = handles::lock(&object)?;
+        state.renderer.set_disk_cache(cache);
+        Ok(())
     })
 }
 
@@ -221,14 +216,26 @@ pub unsafe extern "C" fn shikki_renderer_validation_message_count(
 /// lock is not held through the render. The buffer check and the render use this one copy: a
 /// `shikki_scene_set_output` from another thread between the two cannot make the image a size
 /// other than the buffer's.
-fn snapshot(scene: ShikkiScene) -> FfiResult<SceneState> {
-    handles::read::<_, SceneState>(scene)
+fn snapshot(scene: ShikkiScene) -> FfiResult<Scene> {
+    handles::read::<_, Scene>(scene)
 }
 
-fn render_snapshot(renderer: ShikkiRenderer, scene: &SceneState) -> FfiResult<HdrImage> {
+/// Renders with the renderer locked, then hands the render's warnings (failed renders have them
+/// too) to the program's callback with the lock released, so the callback may call the library,
+/// this renderer included.
+fn render_snapshot(renderer: ShikkiRenderer, scene: &Scene) -> FfiResult<HdrImage> {
     let object = handles::get::<_, RendererState>(renderer)?;
-    let mut state = handles::lock(&object)?;
-    state.render(scene)
+    let (image, warnings, sink) = {
+        let mut state = handles::lock(&object)?;
+        let image = state.render(scene);
+        (image, state.renderer.take_warnings(), state.warning_sink)
+    };
+    if let Some(sink) = sink {
+        for warning in &warnings {
+            sink.deliver(warning);
+        }
+    }
+    image
 }
 
 /// `len` must be exactly `width × height × per_pixel`; computed without overflow, so a caller's
@@ -275,7 +282,7 @@ pub unsafe extern "C" fn shikki_render_rgba32f(
 ) -> ShikkiStatus {
     ffi_boundary!({
         let scene = snapshot(scene)?;
-        check_len("rgba", len, scene.width, scene.height, 4)?;
+        check_len("rgba", len, scene.output.width, scene.output.height, 4)?;
         // SAFETY: the caller's contract above.
         let out = unsafe { slice_mut(rgba, len, "rgba") }?;
         let image = render_snapshot(renderer, &scene)?;
@@ -298,13 +305,13 @@ pub unsafe extern "C" fn shikki_render_rgba8(
 ) -> ShikkiStatus {
     ffi_boundary!({
         let scene = snapshot(scene)?;
-        check_len("rgba", len, scene.width, scene.height, 4)?;
+        check_len("rgba", len, scene.output.width, scene.output.height, 4)?;
         // SAFETY: the caller's contract above.
         let out = unsafe { slice_mut(rgba, len, "rgba") }?;
         let image = render_snapshot(renderer, &scene)?;
         let settings = PngSettings {
-            exposure_ev: scene.exposure_ev,
-            tone_curve: scene.tone_curve,
+            exposure_ev: scene.output.exposure_ev,
+            tone_curve: scene.output.tone_curve,
         };
         let encoder = shikki::output::tonemap::Srgb8Encoder::new(&settings);
         copy_pixels(out, &image, |pixel| {
@@ -332,8 +339,8 @@ pub unsafe extern "C" fn shikki_render_to_file(
         let scene = snapshot(scene)?;
         let image = render_snapshot(renderer, &scene)?;
         let settings = PngSettings {
-            exposure_ev: scene.exposure_ev,
-            tone_curve: scene.tone_curve,
+            exposure_ev: scene.output.exposure_ev,
+            tone_curve: scene.output.tone_curve,
         };
         output::write_image(path, &image, &settings)?;
         Ok(())

@@ -1,72 +1,22 @@
 //! Scene handles: what one picture shows (objects with transforms and materials, lights, camera,
 //! environment, background) and how it is output (size, samples, exposure, tone curve). Built
-//! with calls here, or from scene TOML (`scene_toml.rs`). A scene holds its own references to
-//! meshes and environments and its own copy of each material, so those handles may be destroyed
-//! once added.
-
-use std::sync::Arc;
+//! with calls here, or from scene TOML (`scene_toml.rs`). A scene handle holds a
+//! `shikki::scene::Scene`, the value the CLI and scene files build too, so the renderer cannot
+//! tell where a scene came from. It holds its own references to meshes and environments and its
+//! own copy of each material, so those handles may be destroyed once added.
 
 use glam::{DMat4, DVec3};
-use shikki::environment::Equirect;
+use shikki::environment::{EnvironmentLight, EnvironmentSource};
 use shikki::model::LacquerMaterial;
 use shikki::output::ToneCurve;
 use shikki::raster::draw::{Background, SUPPORTED_SAMPLES};
-use shikki::raster::{default_lights, Camera, Light, Mesh, MAX_LIGHTS};
+use shikki::raster::{default_lights, Camera, Light, MAX_LIGHTS};
+use shikki::scene::{EnvironmentSpec, MeshSource, Scene, SceneObject};
 
 use crate::boundary::{array, check_out, ffi_boundary, write_out, FfiError, FfiResult};
 use crate::handles::{self, ShikkiEnvironment, ShikkiMaterial, ShikkiMesh, ShikkiScene};
 use crate::objects::{EnvironmentObject, MeshObject};
 use crate::status::ShikkiStatus;
-
-/// One object of a scene.
-#[derive(Clone)]
-pub struct ObjectState {
-    pub mesh: Arc<Mesh>,
-    pub transform: DMat4,
-    pub material: LacquerMaterial,
-}
-
-/// The environment light of a scene.
-#[derive(Clone)]
-pub struct EnvironmentState {
-    pub image: Arc<Equirect>,
-    pub intensity: f64,
-    pub rotation_deg: f64,
-}
-
-/// A scene handle's object.
-#[derive(Clone)]
-pub struct SceneState {
-    pub objects: Vec<ObjectState>,
-    pub lights: Vec<Light>,
-    pub camera: Camera,
-    pub environment: Option<EnvironmentState>,
-    pub background: Background,
-    pub width: u32,
-    pub height: u32,
-    pub samples: u32,
-    pub exposure_ev: f32,
-    pub tone_curve: ToneCurve,
-}
-
-impl Default for SceneState {
-    /// No objects, no lights, the default camera, 1024×1024 with 4 samples, ACES at 0 EV and
-    /// the environment as background (black without one): the scene-file defaults.
-    fn default() -> Self {
-        SceneState {
-            objects: Vec::new(),
-            lights: Vec::new(),
-            camera: Camera::default(),
-            environment: None,
-            background: Background::Environment,
-            width: 1024,
-            height: 1024,
-            samples: 4,
-            exposure_ev: 0.0,
-            tone_curve: ToneCurve::Aces,
-        }
-    }
-}
 
 /// Tone curves by their C number (`ShikkiToneCurve`).
 pub fn tone_curve_from_c(value: u32) -> FfiResult<ToneCurve> {
@@ -98,9 +48,9 @@ pub fn check_image_size(width: u32, height: u32) -> FfiResult {
 /// Runs `change` on the scene behind `scene`.
 pub fn with_scene<R>(
     scene: ShikkiScene,
-    change: impl FnOnce(&mut SceneState) -> FfiResult<R>,
+    change: impl FnOnce(&mut Scene) -> FfiResult<R>,
 ) -> FfiResult<R> {
-    let object = handles::get::<_, SceneState>(scene)?;
+    let object = handles::get::<_, Scene>(scene)?;
     let mut state = handles::lock(&object)?;
     change(&mut state)
 }
@@ -109,7 +59,9 @@ fn vec3(v: [f64; 3]) -> DVec3 {
     DVec3::from_array(v)
 }
 
-/// An empty scene (see `SceneState::default`): add objects, lights, an environment.
+/// An empty scene: no objects, no lights, no environment, the default camera, 1024×1024 with 4
+/// samples, ACES at 0 EV and the environment as background (black without one) — the scene-file
+/// defaults. Add objects, lights, an environment.
 ///
 /// # Safety
 /// `out` is valid for one write.
@@ -117,7 +69,7 @@ fn vec3(v: [f64; 3]) -> DVec3 {
 pub unsafe extern "C" fn shikki_scene_create(out: *mut ShikkiScene) -> ShikkiStatus {
     ffi_boundary!({
         check_out(out, "out")?;
-        let handle = handles::insert::<ShikkiScene, _>(SceneState::default());
+        let handle = handles::insert::<ShikkiScene, _>(Scene::default());
         // SAFETY: checked non-NULL; valid for one write by contract.
         unsafe { write_out(out, "out", handle) }
     })
@@ -163,8 +115,8 @@ pub unsafe extern "C" fn shikki_scene_add_object(
         let mesh = handles::read::<_, MeshObject>(mesh)?;
         let material = handles::read::<_, LacquerMaterial>(material)?;
         with_scene(scene, |state| {
-            state.objects.push(ObjectState {
-                mesh,
+            state.objects.push(SceneObject {
+                mesh: MeshSource::Inline(mesh),
                 transform,
                 material,
             });
@@ -308,7 +260,7 @@ pub extern "C" fn shikki_scene_set_environment(
 ) -> ShikkiStatus {
     ffi_boundary!({
         let environment = if environment.id == 0 {
-            None
+            EnvironmentSpec::None
         } else {
             if !(intensity.is_finite() && intensity >= 0.0) {
                 return Err(FfiError::invalid(format!(
@@ -320,12 +272,14 @@ pub extern "C" fn shikki_scene_set_environment(
                     "environment rotation {rotation_deg}°: must be a finite angle in degrees"
                 )));
             }
-            let image = handles::read::<_, EnvironmentObject>(environment)?;
-            Some(EnvironmentState {
-                image,
-                intensity,
-                rotation_deg,
-            })
+            let loaded = handles::read::<_, EnvironmentObject>(environment)?;
+            EnvironmentSpec::Map {
+                source: EnvironmentSource::Loaded(loaded),
+                light: EnvironmentLight {
+                    intensity,
+                    rotation_deg,
+                },
+            }
         };
         with_scene(scene, |state| {
             state.environment = environment;
@@ -368,7 +322,7 @@ pub unsafe extern "C" fn shikki_scene_set_background(
             }
         };
         with_scene(scene, |state| {
-            state.background = background;
+            state.output.background = background;
             Ok(())
         })
     })
@@ -390,9 +344,9 @@ pub extern "C" fn shikki_scene_set_output(
             )));
         }
         with_scene(scene, |state| {
-            state.width = width;
-            state.height = height;
-            state.samples = samples;
+            state.output.width = width;
+            state.output.height = height;
+            state.output.samples = samples;
             Ok(())
         })
     })
@@ -414,8 +368,8 @@ pub extern "C" fn shikki_scene_set_display(
         }
         let tone_curve = tone_curve_from_c(tone_curve)?;
         with_scene(scene, |state| {
-            state.exposure_ev = exposure_ev;
-            state.tone_curve = tone_curve;
+            state.output.exposure_ev = exposure_ev;
+            state.output.tone_curve = tone_curve;
             Ok(())
         })
     })
@@ -432,7 +386,7 @@ pub unsafe extern "C" fn shikki_scene_get_output(
     height: *mut u32,
 ) -> ShikkiStatus {
     ffi_boundary!({
-        let (w, h) = with_scene(scene, |state| Ok((state.width, state.height)))?;
+        let (w, h) = with_scene(scene, |state| Ok((state.output.width, state.output.height)))?;
         if !width.is_null() {
             // SAFETY: non-NULL and writable by contract.
             unsafe { write_out(width, "width", w) }?;

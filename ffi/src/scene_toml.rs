@@ -1,71 +1,37 @@
 //! Scenes from the core's scene description (`shikki::scene`): scene TOML text or files and the
-//! default scene. The core `Scene` names its meshes and environment by source; here they are
-//! loaded once into the handle's `SceneState`, so a render needs no file access.
+//! default scene. The scene is kept as the core built it, except that the mesh files and the
+//! environment map it names are loaded once, here, so a render needs no file access and a bad
+//! file is reported by the call that named it.
 
-use std::collections::HashMap;
 use std::ffi::c_char;
 use std::path::Path;
 use std::sync::Arc;
 
-use shikki::environment::load_environment;
+use shikki::environment::{load_environment, EnvironmentSource};
 use shikki::raster::mesh_io::load_mesh;
-use shikki::raster::Mesh;
 use shikki::scene::{self, EnvironmentSpec, MeshSource, Scene};
 
 use crate::boundary::{c_str, check_out, ffi_boundary, opt_c_str, write_out, FfiResult};
 use crate::handles::{self, ShikkiScene};
-use crate::scene::{EnvironmentState, ObjectState, SceneState};
 use crate::status::ShikkiStatus;
 
-/// Loads every mesh and the environment a core scene names.
-pub fn scene_state(scene: Scene) -> FfiResult<SceneState> {
-    let mut builtins: HashMap<String, Arc<Mesh>> = HashMap::new();
-    let mut objects = Vec::with_capacity(scene.objects.len());
-    for object in scene.objects {
-        let mesh = match object.mesh {
-            MeshSource::Builtin(builtin) => Arc::clone(
-                builtins
-                    .entry(format!("{builtin:?}"))
-                    .or_insert_with(|| Arc::new(builtin.mesh())),
-            ),
-            MeshSource::File(path) => Arc::new(load_mesh(&path)?),
-            MeshSource::Inline(mesh) => mesh,
-        };
-        objects.push(ObjectState {
-            mesh,
-            transform: object.transform,
-            material: object.material,
-        });
+/// `scene` with every file it names loaded into memory (built-in meshes stay built-in).
+pub fn loaded_scene(mut scene: Scene) -> FfiResult<Scene> {
+    for object in &mut scene.objects {
+        if let MeshSource::File(path) = &object.mesh {
+            object.mesh = MeshSource::Inline(Arc::new(load_mesh(path)?));
+        }
     }
-    let environment = match scene.environment {
-        EnvironmentSpec::None => None,
-        EnvironmentSpec::Map {
-            source,
-            intensity,
-            rotation_deg,
-        } => Some(EnvironmentState {
-            image: Arc::new(load_environment(&source)?.image),
-            intensity,
-            rotation_deg,
-        }),
-    };
-    let output = scene.output;
-    Ok(SceneState {
-        objects,
-        lights: scene.lights,
-        camera: scene.camera,
-        environment,
-        background: output.background,
-        width: output.width,
-        height: output.height,
-        samples: output.samples,
-        exposure_ev: output.exposure_ev,
-        tone_curve: output.tone_curve,
-    })
+    if let EnvironmentSpec::Map { source, .. } = &mut scene.environment {
+        if let EnvironmentSource::Named(name) = source {
+            *source = EnvironmentSource::Loaded(Arc::new(load_environment(name)?));
+        }
+    }
+    Ok(scene)
 }
 
 fn make(scene: Scene, out: *mut ShikkiScene) -> FfiResult {
-    let handle = handles::insert::<ShikkiScene, _>(scene_state(scene)?);
+    let handle = handles::insert::<ShikkiScene, _>(loaded_scene(scene)?);
     // SAFETY: every caller checked `out` with check_out and the C contract makes it writable.
     unsafe { write_out(out, "out", handle) }
 }

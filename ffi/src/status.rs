@@ -26,4 +26,7 @@ pub enum ShikkiStatus {
     Panic = 8,
     /// The call needs a part of shikki this build does not have.
     Unsupported = 9,
+    /// shikki reached a state its own code should have made impossible: a bug to report, not a
+    /// fault of the arguments.
+    Internal = 10,
 }

@@ -9,6 +9,9 @@
 //!   included (the C program checks; it exits with the number of failed checks), shared and
 //!   static;
 //! - `threads.c`: the thread-safety contract of docs/c-api.md;
+//! - `large_environment.c`: an 8192 × 4096 HDRI (written here) renders through the C API as it
+//!   does through the CLI, to the bytes of the Rust API's render; the environment disk cache and
+//!   the warning callback;
 //! - with `SHIKKI_VALGRIND_EXAMPLE=1` (CI): both programs under valgrind's memcheck (no invalid
 //!   access, no leak) and under AddressSanitizer + UndefinedBehaviorSanitizer.
 
@@ -17,10 +20,12 @@ use std::process::{Command, Output};
 use std::sync::OnceLock;
 use std::time::Instant;
 
+use shikki::environment::load_environment;
 use shikki::gpu::{ContextOptions, GpuContext};
+use shikki::output::exr::encode_exr;
 use shikki::output::png::encode_png;
-use shikki::output::PngSettings;
-use shikki::scene::{default_scene, SceneRenderer};
+use shikki::output::{HdrImage, PngSettings};
+use shikki::scene::{default_scene, EnvironmentSpec, Scene, SceneRenderer};
 
 /// Small, so that the renders (and the valgrind runs) stay fast on lavapipe.
 const SIZE: u32 = 48;
@@ -123,6 +128,7 @@ impl Programs {
         programs.compile("error_paths", "error_paths", Link::Shared);
         programs.compile("error_paths", "error_paths_static", Link::Static);
         programs.compile("threads", "threads", Link::Shared);
+        programs.compile("large_environment", "large_environment", Link::Shared);
         if slow_checks_enabled() {
             programs.compile("error_paths", "error_paths_asan", Link::SharedSanitized);
             programs.compile("threads", "threads_asan", Link::SharedSanitized);
@@ -197,22 +203,52 @@ fn assert_all_checks_passed(program: &str, output: &Output) {
     }
 }
 
-/// What the Rust API renders for the scene render_bowl.c renders: the default scene at
-/// SIZE × SIZE with 1 sample, PNG at 0 EV with ACES.
-fn rust_png() -> Vec<u8> {
+/// The default scene at SIZE × SIZE with 1 sample: what the C programs render.
+fn small_default_scene() -> Scene {
+    let mut scene = default_scene();
+    scene.output.width = SIZE;
+    scene.output.height = SIZE;
+    scene.output.samples = 1;
+    scene
+}
+
+/// `scene` rendered by the Rust API (validation on, no disk cache) and encoded with `png`.
+fn rust_render_png(scene: &Scene, png: &PngSettings) -> Vec<u8> {
     let gpu = GpuContext::new(&ContextOptions {
         validation: true,
         ..ContextOptions::default()
     })
     .expect("a Vulkan device");
-    let mut scene = default_scene();
-    scene.output.width = SIZE;
-    scene.output.height = SIZE;
-    scene.output.samples = 1;
-    let image = SceneRenderer::new(&gpu)
-        .and_then(|mut renderer| renderer.render(&gpu, &scene))
-        .expect("the Rust API renders the default scene");
-    encode_png(&image, &PngSettings::default()).expect("PNG encoding")
+    let image = SceneRenderer::with_disk_cache(None)
+        .render(&gpu, scene)
+        .expect("the Rust API renders the scene");
+    encode_png(&image, png).expect("PNG encoding")
+}
+
+/// What the Rust API renders for the scene render_bowl.c renders: the default scene at
+/// SIZE × SIZE with 1 sample, PNG at 0 EV with ACES.
+fn rust_png() -> Vec<u8> {
+    rust_render_png(&small_default_scene(), &PngSettings::default())
+}
+
+/// Keeps `actual` and `expected` under target/test-output and fails, when they differ.
+fn assert_same_png(program: &str, actual: &[u8], expected: &[u8]) {
+    if actual == expected {
+        return;
+    }
+    let keep = repo_root().join(format!("target/test-output/{program}-actual.png"));
+    let _ = std::fs::create_dir_all(keep.parent().unwrap_or(Path::new(".")));
+    let _ = std::fs::write(&keep, actual);
+    let _ = std::fs::write(
+        keep.with_file_name(format!("{program}-expected.png")),
+        expected,
+    );
+    panic!(
+        "{program}'s PNG ({} bytes) differs from the Rust API's ({} bytes); kept at {}",
+        actual.len(),
+        expected.len(),
+        keep.display()
+    );
 }
 
 #[test]
@@ -224,21 +260,7 @@ fn c_example_png_equals_the_rust_api_png_shared_and_static() {
         let output = run(programs.command(program).arg(&png).arg(SIZE.to_string()));
         assert_success(program, &output);
         let actual = std::fs::read(&png).expect("the example wrote its PNG");
-        if actual != expected {
-            let keep = repo_root().join(format!("target/test-output/{program}-actual.png"));
-            let _ = std::fs::create_dir_all(keep.parent().unwrap_or(Path::new(".")));
-            let _ = std::fs::write(&keep, &actual);
-            let _ = std::fs::write(
-                keep.with_file_name(format!("{program}-expected.png")),
-                &expected,
-            );
-            panic!(
-                "{program}'s PNG ({} bytes) differs from the Rust API's ({} bytes); kept at {}",
-                actual.len(),
-                expected.len(),
-                keep.display()
-            );
-        }
+        assert_same_png(program, &actual, &expected);
     }
 }
 
@@ -259,6 +281,133 @@ fn c_threads_render_identical_images_and_keep_their_errors_apart() {
     let programs = Programs::get();
     let output = run(&mut programs.command("threads"));
     assert_all_checks_passed("threads", &output);
+}
+
+/// The built-in studio map upsampled 8× by pixel replication to 8192 × 4096 and written as a
+/// run-length-encoded Radiance file (runs of 8 equal bytes keep it near 32 MiB).
+fn write_large_hdr(path: &Path) {
+    const FACTOR: usize = 8;
+    let studio = load_environment("builtin:studio")
+        .expect("the built-in studio map")
+        .image;
+    let (w, h) = (
+        studio.width as usize * FACTOR,
+        studio.height as usize * FACTOR,
+    );
+    let mut bytes = format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {h} +X {w}\n").into_bytes();
+    let mut channel = vec![0u8; w];
+    for y in 0..h {
+        let row = &studio.pixels[(y / FACTOR) * studio.width as usize..];
+        let rgbe: Vec<[u8; 4]> = (0..w).map(|x| to_rgbe(row[x / FACTOR])).collect();
+        bytes.extend_from_slice(&[2, 2, (w >> 8) as u8, (w & 0xff) as u8]);
+        for c in 0..4 {
+            for (byte, pixel) in channel.iter_mut().zip(&rgbe) {
+                *byte = pixel[c];
+            }
+            rle_channel(&channel, &mut bytes);
+        }
+    }
+    std::fs::write(path, bytes).expect("write the large map");
+}
+
+/// Radiance's shared-exponent encoding: mantissas = channel · 256 / 2^e, with e such that the
+/// largest channel lies in [0.5, 1) · 2^e.
+fn to_rgbe([r, g, b]: [f32; 3]) -> [u8; 4] {
+    let largest = r.max(g).max(b);
+    if largest < 1e-32 {
+        return [0; 4];
+    }
+    let exponent = largest.log2().floor() as i32 + 1;
+    let scale = 256.0 / 2f32.powi(exponent);
+    let m = |c: f32| (c * scale) as u8;
+    [m(r), m(g), m(b), (exponent + 128) as u8]
+}
+
+/// One channel of a scanline: runs of 4 to 127 equal bytes as (128 + n, byte), the rest as
+/// literals of up to 128 bytes (n, bytes…).
+fn rle_channel(data: &[u8], out: &mut Vec<u8>) {
+    let run_at = |i: usize| {
+        let limit = (data.len() - i).min(127);
+        (1..limit).take_while(|&k| data[i + k] == data[i]).count() + 1
+    };
+    let mut i = 0;
+    while i < data.len() {
+        let run = run_at(i);
+        if run >= 4 {
+            out.extend_from_slice(&[128 + run as u8, data[i]]);
+            i += run;
+            continue;
+        }
+        let start = i;
+        while i < data.len() && i - start < 128 && run_at(i) < 4 {
+            i += 1;
+        }
+        out.push((i - start) as u8);
+        out.extend_from_slice(&data[start..i]);
+    }
+}
+
+/// A small linear EXR whose first column is negative: replaced by 0 on load, with a warning.
+fn write_bad_pixel_exr(path: &Path) {
+    let (w, h) = (64, 32);
+    let pixels = (0..w * h)
+        .map(|i| {
+            if i % w == 0 {
+                [-1.0, 0.5, 0.5, 1.0]
+            } else {
+                [0.8, 0.6, 0.4, 1.0]
+            }
+        })
+        .collect();
+    let image = HdrImage {
+        width: w,
+        height: h,
+        pixels,
+    };
+    std::fs::write(path, encode_exr(&image).expect("EXR encoding")).expect("write the EXR");
+}
+
+/// An 8192 × 4096 HDRI renders through the C API as through the CLI (prefilter face clamped to
+/// the device, so lavapipe takes it), byte for byte the Rust API's PNG; the disk cache and the
+/// warning callback are checked by the program. On lavapipe each 8K prefilter takes seconds, so
+/// the test renders the map twice (C, then Rust) and the C program's second renderer reads the
+/// disk cache instead.
+#[test]
+fn c_renders_an_8k_environment_like_the_rust_api() {
+    let programs = Programs::get();
+    let dir = std::env::temp_dir().join(format!("shikki-large-env-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create the temporary directory");
+    let (large, bad) = (dir.join("large.hdr"), dir.join("bad-pixels.exr"));
+    let started = Instant::now();
+    write_large_hdr(&large);
+    write_bad_pixel_exr(&bad);
+    eprintln!("maps written: {:.1} s", started.elapsed().as_secs_f64());
+    let png = dir.join("large.png");
+    let output = run(programs
+        .command("large_environment")
+        .arg(&large)
+        .arg(&bad)
+        .arg(dir.join("cache"))
+        .arg(&png)
+        .arg(SIZE.to_string()));
+    assert_all_checks_passed("large_environment", &output);
+    let actual = std::fs::read(&png).expect("the program wrote its PNG");
+
+    let mut scene = small_default_scene();
+    scene.environment = EnvironmentSpec::named(large.display().to_string());
+    let display = PngSettings {
+        exposure_ev: scene.output.exposure_ev,
+        tone_curve: scene.output.tone_curve,
+    };
+    let started = Instant::now();
+    let expected = rust_render_png(&scene, &display);
+    eprintln!(
+        "Rust API render with the large map: {:.1} s",
+        started.elapsed().as_secs_f64()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_same_png("large_environment", &actual, &expected);
 }
 
 /// The slow runs (valgrind, helgrind, sanitizers: minutes on lavapipe) happen when

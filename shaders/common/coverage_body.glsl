@@ -5,7 +5,8 @@
 // value), and with the environment as background every pixel gets it.
 // shade.frag then draws with an early depth test that passes only where depth is 0: llvmpipe skips
 // a block of pixels whose lanes all fail an early depth test, but runs both sides of a branch or a
-// `discard` under a lane mask, so this is how the shading of uncovered pixels is skipped.
+// `discard` under a lane mask (quirk `loop_body_runs_when_no_lane_enters`), so this is how the
+// shading of uncovered pixels is skipped.
 //
 // The includer defines MULTISAMPLED or not.
 

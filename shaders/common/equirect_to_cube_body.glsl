@@ -13,44 +13,39 @@
 // and finished by a second dispatch, equirect_to_cube_near.comp (NEAR_PASS), whose lanes all have
 // work; see NearTexels below.
 
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#include "interface.glsl"
+
+layout(local_size_x = PREFILTER_WORKGROUP, local_size_y = PREFILTER_WORKGROUP, local_size_z = 1) in;
 
 #include "cubemap.glsl"
 
 // S = equirect_supersample(W, N) (src/environment/params.rs), from the push constants.
 #define SUPERSAMPLE params.supersample
 
-layout(push_constant) uniform Params {
-    uint src_width;
-    uint src_height;
-    uint face_size;
-    float intensity;
-    float rotation_cos;
-    float rotation_sin;
-    uint supersample;
-} params;
+layout(push_constant) uniform PushConstants {
+    EquirectToCubeParams params;
+};
 
 // RGBA32F texels.
 #include "texel_buffer.glsl"
-layout(set = 0, binding = 0) uniform textureBuffer equirect;
-layout(std430, set = 0, binding = 1) buffer Cube { vec4 cube[]; };
+layout(set = 0, binding = PREFILTER_SOURCE_BINDING) uniform textureBuffer equirect;
+layout(std430, set = 0, binding = PREFILTER_DEST_BINDING) buffer Cube { vec4 cube[]; };
 
 // Texels with sub-samples near a pixel edge, which equirect_to_cube_near.comp finishes in double
-// precision: header (count, then the near pass's indirect dispatch x, y, z), then texel indices.
-// Why a second pass: llvmpipe runs a loop's body once even when no lane enters it, so the double
-// path inline cost every 8-lane group its full price (~0.03 s of the step at face 512), where
-// only a few percent of texels need it.
-layout(std430, set = 0, binding = 2) buffer NearTexels {
-    uint near_header[4];
+// precision: the header (count, then the near pass's indirect dispatch), then texel indices.
+// Why a second pass: the double path inline would cost every lane group its full price, where
+// only a few percent of texels need it (quirk `loop_body_runs_when_no_lane_enters`).
+layout(std430, set = 0, binding = NEAR_TEXELS_BINDING) buffer NearTexels {
+    NearHeader near_header;
     uint near_texels[];
 };
-const uint NEAR_GROUP_SIZE = 64u; // = local_size_x × local_size_y
+const uint NEAR_GROUP_SIZE = PREFILTER_WORKGROUP * PREFILTER_WORKGROUP;
 
 vec3 fetch(int x, int y) {
     int w = int(params.src_width);
     int h = int(params.src_height);
     // Longitude wraps: cells are in 0..=W (u ∈ [0, 1], ± rounding), so one conditional add or
-    // subtract is the remainder — integer % is not vectorised on lavapipe (it cost 2× the pass).
+    // subtract is the remainder — integer % is not vectorised on lavapipe (BENCHMARKS.md).
     x = x < 0 ? x + w : (x >= w ? x - w : x);
     y = clamp(y, 0, h - 1);       // latitude clamps at the poles
     return texelFetch(equirect, y * w + x).rgb;
@@ -186,10 +181,10 @@ void main() {
         // The partial sum and the sub-samples still to add (exact in a float: < 2^16), for the
         // near pass, which appends the rest in the same order and scales as above.
         cube[index] = vec4(sum, float(near_bits));
-        uint slot = atomicAdd(near_header[0], 1u);
+        uint slot = atomicAdd(near_header.count, 1u);
         near_texels[slot] = index;
         if (slot % NEAR_GROUP_SIZE == 0u) {
-            atomicAdd(near_header[1], 1u);
+            atomicAdd(near_header.dispatch_x, 1u);
         }
     }
 #endif
@@ -198,7 +193,7 @@ void main() {
 // The near pass: one invocation per listed texel, every lane with work.
 void main() {
     uint slot = gl_WorkGroupID.x * NEAR_GROUP_SIZE + gl_LocalInvocationIndex;
-    if (slot >= near_header[0]) {
+    if (slot >= near_header.count) {
         return;
     }
     uint index = near_texels[slot];

@@ -1,40 +1,28 @@
 // Per-draw uniforms and resources shared by mesh.vert, gbuffer.frag, the shading pass and the
-// background pass (std140). The host side is `FrameUniforms` in src/shading.rs: change both together.
+// background pass. `Frame` and every number here come from the interface declaration
+// (src/gpu/shaders/interface.rs); the host packs the frame in raster/draw/frame.rs.
 #ifndef FRAME_GLSL
 #define FRAME_GLSL
 
-const int MAX_LIGHTS = 16;
-const int MAX_ENV_LAYERS = 16;
-// K, the bound environment's layer count, set per pipeline (raster/draw.rs): lavapipe has no
-// shaderSampledImageArrayDynamicIndexing, so env_layers takes constant indices only, and a
-// constant K removes the absent layers' lookups at pipeline creation.
-layout(constant_id = 0) const int ENV_LAYER_COUNT = MAX_ENV_LAYERS;
+#include "interface.glsl"
 
-layout(std140, set = 0, binding = 0) uniform Frame {
-    mat4 view_projection;
-    vec4 eye;              // xyz: camera position
-    ivec4 light_count;     // x: number of lights
-    vec4 light_vector[MAX_LIGHTS]; // w = 0: directional, xyz towards the light; w = 1: point, xyz position
-    vec4 light_color[MAX_LIGHTS];  // rgb: irradiance E (directional) or intensity I (point)
-    ivec4 environment;     // x: 1 if an environment lights the scene, y: number of layers K
-    vec4 layer_beta[MAX_ENV_LAYERS / 4]; // β_k, four per vec4
-    vec4 layer_log_beta[MAX_ENV_LAYERS / 4]; // ln β_k (k ≥ 1), computed on the host
-    vec4 camera_right;     // camera basis (world), for background rays
-    vec4 camera_up;
-    vec4 camera_back;      // −view direction
-    vec4 camera_params;    // tan(fov/2), aspect W/H, width, height
-    vec4 strip_offset;     // y: image row of the target's row 0 (tall images render in strips)
-    ivec4 draw_info;       // x: object index + 1 (G-buffer pass)
-    vec4 background_color; // the constant background (rgba; transparent is 0)
-} frame;
+// K, the bound environment's layer count, set per pipeline: env_layers may be indexed by
+// constants only (lavapipe has no shaderSampledImageArrayDynamicIndexing), and a constant K
+// removes the absent layers' lookups at pipeline creation.
+layout(constant_id = ENV_LAYER_COUNT_ID) const int ENV_LAYER_COUNT = MAX_ENV_LAYERS;
 
-layout(set = 0, binding = 2) uniform samplerCube env_layers[MAX_ENV_LAYERS];
-layout(set = 0, binding = 3) uniform samplerCube env_irradiance;
+layout(std140, set = 0, binding = FRAME_BINDING) uniform FrameBlock {
+    Frame frame;
+};
 
-// What pixels no mesh covers show, set per pipeline (raster/draw.rs): 0, frame.background_color;
-// 1, the sharp environment along the pixel's ray. A constant, so the cube lookup is not run (under
-// a lane mask, as llvmpipe runs both sides of a branch) when the background is a colour.
-layout(constant_id = 2) const int BACKGROUND_KIND = 0;
+layout(set = 0, binding = ENV_LAYERS_BINDING) uniform samplerCube env_layers[MAX_ENV_LAYERS];
+layout(set = 0, binding = ENV_IRRADIANCE_BINDING) uniform samplerCube env_irradiance;
+
+// What pixels no mesh covers show, set per pipeline: BACKGROUND_COLOR, frame.background_color;
+// BACKGROUND_ENVIRONMENT, the sharp environment along the pixel's ray. A constant, so the cube
+// lookup is not run under a lane mask (quirk `loop_body_runs_when_no_lane_enters`) when the
+// background is a colour.
+layout(constant_id = BACKGROUND_KIND_ID) const int BACKGROUND_KIND = BACKGROUND_COLOR;
 
 float layer_beta(int k) {
     return frame.layer_beta[k / 4][k % 4];
@@ -49,11 +37,10 @@ float layer_log_beta(int k) {
 //
 // Why a weighted sum over all K layers instead of sampling the two that matter: the pair differs
 // between fragments, and indexing a sampler array with anything but a constant needs
-// shaderSampledImageArrayDynamicIndexing, which lavapipe 22.3 does not have (so not even a
-// dynamically uniform loop index is allowed). The old form (a 16-case `switch` per lookup, called
-// up to twice per candidate layer) made llvmpipe, which runs every case of a divergent switch under
-// a lane mask, do ~240 cube fetches per fragment; this does K, each at a constant index. Exact:
-// the weights are (1 − t, t) on layers (k0, k0 + 1) and 0 elsewhere, so the sum is
+// shaderSampledImageArrayDynamicIndexing, which lavapipe does not have (so not even a dynamically
+// uniform loop index is allowed). A `switch` over the layer index would run every case under a
+// lane mask (quirk `loop_body_runs_when_no_lane_enters`); this does K lookups, each at a constant
+// index. Exact: the weights are (1 − t, t) on layers (k0, k0 + 1) and 0 elsewhere, so the sum is
 // mix(L_k0, L_k0+1, t) plus exact zeros.
 vec3 prefiltered_radiance(vec3 dir, float beta) {
     int count = ENV_LAYER_COUNT;
@@ -66,7 +53,7 @@ vec3 prefiltered_radiance(vec3 dir, float beta) {
         } else {
             // k0: the last layer k ≥ 1 with β_k ≤ β (β_k increase with k), and t = 0 on the last
             // layer. Written as a fixed run of selects over the constant K, not a search loop:
-            // llvmpipe runs a loop until every lane has left it, with its bookkeeping per lap.
+            // a divergent loop runs until every lane has left it, with its bookkeeping per lap.
             k0 = 1;
             float log_lo = layer_log_beta(1);
             float log_hi = layer_log_beta(min(2, count - 1));
@@ -83,6 +70,9 @@ vec3 prefiltered_radiance(vec3 dir, float beta) {
         }
     }
     vec3 sum = vec3(0.0);
+#if MAX_ENV_LAYERS != 16
+#error "prefiltered_radiance adds layers 0..15: list one ADD_LAYER per layer below"
+#endif
 #define ADD_LAYER(K)                                                            \
     if (K < ENV_LAYER_COUNT) {                                                  \
         float w = K == k0 ? 1.0 - t : (K == k0 + 1 ? t : 0.0);                 \
@@ -116,7 +106,7 @@ vec3 camera_ray(vec2 pixel) {
 
 // What pixels no mesh covers show (SPEC §1 camera ray for the environment): BACKGROUND_KIND.
 vec4 background_radiance(vec2 pixel) {
-    if (BACKGROUND_KIND == 1) {
+    if (BACKGROUND_KIND == BACKGROUND_ENVIRONMENT) {
         return vec4(sharp_radiance(camera_ray(pixel)), 1.0);
     }
     return frame.background_color;

@@ -2,25 +2,23 @@
 // by shade_body.glsl (raster) and brdf_eval.comp (the compute evaluator tests compare with the CPU
 // model in src/model/brdf.rs). Keep the two in step formula by formula.
 //
-// The includer defines FRESNEL_SET and FRESNEL_BINDING before including this file.
+// The includer's pipeline binds the Fresnel knots at FRESNEL_KNOTS_BINDING of set 0.
 
 #ifndef LACQUER_BRDF_GLSL
 #define LACQUER_BRDF_GLSL
 
-#ifndef FRESNEL_BINDING
-#error "define FRESNEL_SET and FRESNEL_BINDING before including lacquer_brdf.glsl"
-#endif
-
+#include "interface.glsl"
 #include "math.glsl"
 
-// Set per pipeline (raster/draw.rs) when every table of the draw has its knots at exactly i·step
-// degrees with step a power of two, checked on the host: then θ/step is exact and its integer part
-// is the interval, with no check or search (llvmpipe runs a search loop's body at least once).
-layout(constant_id = 3) const bool FRESNEL_POW2_GRID = false;
+// Set per pipeline when every table of the draw has its knots at exactly i·step degrees with step
+// a power of two, checked on the host: then θ/step is exact and its integer part is the interval,
+// with no check or search (a search loop's body runs even where no lane needs it: quirk
+// `loop_body_runs_when_no_lane_enters`).
+layout(constant_id = FRESNEL_POW2_GRID_ID) const bool FRESNEL_POW2_GRID = false;
 
 // Knots of the Fresnel table: (angle_deg, r, g, b), angles strictly increasing from 0 to 90.
 #include "texel_buffer.glsl"
-layout(set = FRESNEL_SET, binding = FRESNEL_BINDING) uniform textureBuffer fresnel_knots;
+layout(set = 0, binding = FRESNEL_KNOTS_BINDING) uniform textureBuffer fresnel_knots;
 
 struct LacquerParams {
     float beckmann_m;
@@ -33,6 +31,21 @@ struct LacquerParams {
     int fresnel_first; // index of the table's first knot in fresnel_knots (tables are concatenated)
     int fresnel_count; // number of knots
 };
+
+// The BRDF's parameters of an object's material: the one unpacking of ObjectMaterial.
+LacquerParams lacquer_params(ObjectMaterial m) {
+    LacquerParams p;
+    p.beckmann_m = m.beckmann_m;
+    p.diffuse_a = m.diffuse_a;
+    p.diffuse_b = m.diffuse_b;
+    p.diffuse_a_lo = m.diffuse_a_lo;
+    p.diffuse_b_lo = m.diffuse_b_lo;
+    p.lacquer_g = m.lacquer_g;
+    p.albedo = m.albedo;
+    p.fresnel_first = int(m.fresnel_first);
+    p.fresnel_count = int(m.fresnel_count);
+    return p;
+}
 
 // --- Error-free transformations (Knuth TwoSum, Dekker/Veltkamp TwoProduct) -------------------
 // Why: the smooth preset has f(nv) = a + b·nv with a < 0, which crosses zero at nv = -a/b ≈ 0.029.

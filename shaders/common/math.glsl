@@ -1,6 +1,5 @@
-// Accurate inverse trigonometry. GLSL's acos/atan have no useful precision guarantee in Vulkan
-// (atan's bound is 4096 ulp) and lavapipe's acos is off by ~1e-4 rad, which the oracle tests can
-// see; these are exact to about 1e-7 rad everywhere.
+// Accurate inverse trigonometry (quirk `imprecise_inverse_trig`: GLSL's acos/atan have no useful
+// precision bound in Vulkan): these are exact to about 1e-7 rad everywhere.
 #ifndef MATH_GLSL
 #define MATH_GLSL
 

@@ -7,42 +7,28 @@
 // triangles a forward lacquer shader ran on every block each triangle touched (and on hidden
 // surfaces); here each pixel is shaded once per visible surface (BENCHMARKS.md). Pixels no mesh
 // covers already hold the background and fail the early depth test (coverage_body.glsl), which is
-// the one way llvmpipe skips a block of pixels: it runs both sides of a branch under a lane mask.
-// The draw is also scissored to the meshes' screen bounds (raster/draw.rs).
+// how llvmpipe skips a block of pixels: a branch would run under a lane mask (quirk
+// `loop_body_runs_when_no_lane_enters`). The draw is also scissored to the meshes' screen bounds
+// (raster/draw/passes.rs).
 //
 // The includer defines MULTISAMPLED (sampler2DMS G-buffer) or not (sampler2D).
 
 #include "frame.glsl"
-#define FRESNEL_SET 0
-#define FRESNEL_BINDING 1
 #include "lacquer_brdf.glsl"
 #include "lacquer_shade.glsl"
 
-// Per object, four vec4s: (m, a, b, g(r)), (k_d, knot count), (a_lo, b_lo, first knot, 0),
-// (β_normal, β_grazing, p, 0). Packed by shading::ObjectMaterial.
+// Every object's ObjectMaterial, OBJECT_MATERIAL_TEXELS texels each.
 #include "texel_buffer.glsl"
-layout(set = 0, binding = 4) uniform textureBuffer object_material;
+layout(set = 0, binding = OBJECT_MATERIAL_BINDING) uniform textureBuffer object_material;
 
 #include "gbuffer_samples.glsl"
 
 layout(location = 0) out vec4 out_radiance; // linear radiance, alpha = coverage
 
 vec3 shade_object(int object, vec3 position, vec3 interpolated_normal) {
-    vec4 material = texelFetch(object_material, 4 * object + 0);
-    vec4 albedo_count = texelFetch(object_material, 4 * object + 1);
-    vec4 material_lo = texelFetch(object_material, 4 * object + 2);
-    vec4 view_blur = texelFetch(object_material, 4 * object + 3);
-    LacquerParams p;
-    p.beckmann_m = material.x;
-    p.diffuse_a = material.y;
-    p.diffuse_b = material.z;
-    p.diffuse_a_lo = material_lo.x;
-    p.diffuse_b_lo = material_lo.y;
-    p.lacquer_g = material.w;
-    p.albedo = albedo_count.xyz;
-    p.fresnel_first = int(material_lo.z);
-    p.fresnel_count = int(albedo_count.w);
-    return lacquer_radiance(p, view_blur.xyz, position, interpolated_normal);
+    ObjectMaterial m = FETCH_OBJECT_MATERIAL(object_material, object);
+    vec3 view_blur = vec3(m.beta_normal, m.beta_grazing, m.beta_power);
+    return lacquer_radiance(lacquer_params(m), view_blur, position, interpolated_normal);
 }
 
 void main() {
@@ -66,8 +52,8 @@ void main() {
     }
     // Samples of one triangle hold bit-identical values (interpolated at the pixel centre), so
     // each distinct (position, normal, object) is shaded once and weighted by its sample count.
-    // A loop, not a branch per sample: llvmpipe repeats a loop only while some lane needs it, but
-    // runs both sides of every branch.
+    // A loop, not a branch per sample: a loop repeats only while some lane needs it, but both
+    // sides of every branch run (quirk `loop_body_runs_when_no_lane_enters`).
     // coverage_body.glsl's depth test lets through only pixels with a covered sample; were one to
     // have none, the loop body below adds nothing (weight 0) and reads a valid object.
     uint todo = covered;

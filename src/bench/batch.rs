@@ -12,7 +12,7 @@ use crate::scene::batch::{run_batch, BatchOptions, BatchPlan};
 use crate::scene::SceneRenderer;
 use crate::{Error, Result};
 
-/// The target: throughput ≥ 90 % of 1 / (GPU render time per image).
+/// The target (BENCHMARKS.md, "Targets"): throughput ≥ 90 % of 1 / (GPU render time per image).
 pub const EFFICIENCY_LIMIT: f64 = 0.9;
 
 /// Timed single-image renders after each batch run.

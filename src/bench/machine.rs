@@ -40,6 +40,8 @@ pub struct Driver {
     /// e.g. "Mesa 22.3.6 (LLVM 15.0.6)".
     pub driver_info: String,
     pub vulkan: String,
+    /// The driver's active quirks by name (`gpu::Quirks`).
+    pub quirks: Vec<String>,
 }
 
 impl Driver {
@@ -51,6 +53,7 @@ impl Driver {
             driver_name: info.driver_name.clone(),
             driver_info: info.driver_info.clone(),
             vulkan: info.api_version.clone(),
+            quirks: info.quirks.active().into_iter().map(String::from).collect(),
         }
     }
 }

@@ -8,7 +8,7 @@ use super::startup::run_child;
 use super::{BenchConfig, ScratchDir, Stat, Target};
 use crate::{Error, Result};
 
-/// The target: ≤ 256 MiB.
+/// The target (BENCHMARKS.md, "Targets"): ≤ 256 MiB.
 pub const PEAK_LIMIT_MIB: f64 = 256.0;
 
 #[derive(Clone, Debug, Serialize)]

@@ -1,4 +1,4 @@
-//! # bench — `shikki bench`: every stage measured, medians and same-run ratios (issue 7)
+//! # bench — `shikki bench`: every stage measured, medians and same-run ratios
 //!
 //! One file per measurement: [`render`] (lacquer draw vs the trivial-shader floor, GPU
 //! timestamps), [`prefilter`] (GPU vs the CPU oracle), [`batch`] (images per second vs the GPU
@@ -20,7 +20,7 @@ use serde::Serialize;
 use crate::gpu::GpuContext;
 use crate::{Error, Result};
 
-/// What to measure and how big: [`BenchConfig::full`] is the issue's configuration,
+/// What to measure and how big: [`BenchConfig::full`] is the configuration the targets name,
 /// [`BenchConfig::quick`] a small one for CI smoke runs.
 #[derive(Clone, Debug, Serialize)]
 pub struct BenchConfig {
@@ -142,7 +142,7 @@ impl Stat {
     }
 }
 
-/// One target of the issue: the measured value against its limit.
+/// One performance target (BENCHMARKS.md, "Targets"): the measured value against its limit.
 #[derive(Clone, Debug, Serialize)]
 pub struct Target {
     pub description: String,
@@ -212,7 +212,10 @@ pub fn run(
         false => None,
     };
     let prefilter = match stage("prefilter: GPU vs CPU oracle", Stage::Prefilter) {
-        true => Some(prefilter::run(gpu, config)?),
+        true => Some(prefilter::PrefilterBench {
+            timestamps_late: render.is_some() && gpu.quirks().late_timestamps_after_graphics,
+            ..prefilter::run(gpu, config)?
+        }),
         false => None,
     };
     let batch = match stage("batch", Stage::Batch) {

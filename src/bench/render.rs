@@ -14,7 +14,8 @@ use crate::raster::{default_lights, BuiltinMesh, Camera};
 use crate::scene::{EnvironmentSpec, MeshSource, OutputSpec, Scene, SceneObject, SceneRenderer};
 use crate::Result;
 
-/// The target: lacquer draw ≤ 2 × the trivial draw of the same geometry.
+/// The target (BENCHMARKS.md, "Targets"): lacquer draw ≤ 2 × the trivial draw of the same
+/// geometry.
 pub const RATIO_LIMIT: f64 = 2.0;
 
 #[derive(Clone, Debug, Serialize)]
@@ -52,11 +53,7 @@ pub fn bowl_scene(size: u32, samples: u32, background: Background) -> Result<Sce
             material: LacquerMaterial::preset("smooth-red")?,
         }],
         lights: default_lights(),
-        environment: EnvironmentSpec::Map {
-            source: crate::environment::load::BUILTIN_STUDIO.into(),
-            intensity: 1.0,
-            rotation_deg: 0.0,
-        },
+        environment: EnvironmentSpec::named(crate::environment::load::BUILTIN_STUDIO),
         output: OutputSpec {
             width: size,
             height: size,

@@ -19,7 +19,7 @@ use serde::Serialize;
 use super::{BenchConfig, ScratchDir, Stat, Target};
 use crate::{Error, Result};
 
-/// The target: warm start-up ≤ 50 % of cold.
+/// The target (BENCHMARKS.md, "Targets"): warm start-up ≤ 50 % of cold.
 pub const WARM_LIMIT: f64 = 0.5;
 
 /// The environment variable a child `shikki` reads to print its peak resident memory at exit.

@@ -71,7 +71,12 @@ pub fn markdown(report: &BenchReport) -> String {
             ),
             &p.gpu_wall,
         );
-        row("prefilter", "GPU passes (timestamps)".into(), &p.gpu_passes);
+        let passes = if p.timestamps_late {
+            "GPU passes (timestamps; one pass late on this driver: late_timestamps_after_graphics)"
+        } else {
+            "GPU passes (timestamps)"
+        };
+        row("prefilter", passes.into(), &p.gpu_passes);
         row(
             "prefilter",
             format!("CPU oracle, {} threads (wall)", p.cpu_threads),

@@ -1,7 +1,11 @@
-//! The argument surface (clap derive) and the small value parsers it needs.
+//! The argument surface (clap derive) of every subcommand and the small value parsers it needs.
+//! The files that run the commands import this one, never the reverse: it names only library
+//! types and constants.
 
+use crate::bench::Stage;
 use crate::output::ToneCurve;
 use crate::raster::draw::Background;
+use crate::raster::mesh::{BuiltinMesh, BUILTIN_SEGMENTS};
 use crate::{Error, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use glam::DVec3;
@@ -33,18 +37,18 @@ pub enum Command {
     /// Prefilter an environment on the GPU and write its layers and irradiance as EXR strips.
     Prefilter(PrefilterArgs),
     /// Fit the lacquer model to goniophotometer CSV or MERL data; write a material TOML.
-    Fit(super::fit::FitArgs),
+    Fit(FitArgs),
     /// Generate synthetic goniophotometer measurements from a material.
-    Synth(super::fit::SynthArgs),
+    Synth(SynthArgs),
     /// Render every job of a jobs file (a base scene plus sweeps): images, manifest.csv and
     /// contact_sheet.png.
-    Batch(super::scene_cmd::BatchArgs),
+    Batch(BatchArgs),
     /// Measure every stage (render, prefilter, batch, start-up, memory): medians of repeated runs
     /// and same-run ratios against the performance targets (BENCHMARKS.md).
-    Bench(super::bench::BenchArgs),
+    Bench(BenchArgs),
     /// Export a built-in mesh as OBJ or GLB (for Blender or another renderer); the file loads
     /// back in shikki to the same triangles.
-    Mesh(super::mesh_cmd::MeshArgs),
+    Mesh(MeshArgs),
 }
 
 /// A preset and `--set` overrides: the material of SPEC §2–3.
@@ -176,6 +180,96 @@ pub struct PrefilterArgs {
     pub rotation_deg: f64,
 }
 
+#[derive(Debug, Args)]
+pub struct FitArgs {
+    /// Measurements: a goniophotometer CSV (.csv, see docs/measurements.md) or a MERL BRDF
+    /// (.binary).
+    pub data: PathBuf,
+    /// The material TOML to write; the Fresnel table goes beside it as <name>.fresnel.csv.
+    #[arg(short = 'o', long = "output", value_name = "MATERIAL.toml")]
+    pub output: PathBuf,
+    /// Also write a report (residuals, tables, PNG plots) into this directory.
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
+    /// Split k_d·g(r)·f(N·V), which the data fix only as a product, with this material's
+    /// f(1) = a + b and g at the least-lacquer board (a preset name or a material TOML); it also
+    /// supplies β_* and the IOR, which reflectance data cannot show. Default: f(1) = g(1) = 1.
+    #[arg(long = "normalise-like", value_name = "PRESET|FILE.toml")]
+    pub normalise_like: Option<String>,
+}
+
+#[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("source").required(true).args(["material", "preset"])))]
+pub struct SynthArgs {
+    /// A material TOML to generate data from.
+    pub material: Option<PathBuf>,
+    /// A preset instead of a file: smooth, rough, smooth-black, smooth-red, rough-black,
+    /// rough-red.
+    #[arg(long)]
+    pub preset: Option<String>,
+    /// Output: goniophotometer CSV (.csv) or MERL BRDF (.binary, one board).
+    #[arg(short = 'o', long = "output", value_name = "DATA.csv")]
+    pub output: PathBuf,
+    /// Multiplicative Gaussian noise σ (0.02 = 2 %).
+    #[arg(long, default_value_t = 0.0)]
+    pub noise: f64,
+    /// Seed of the noise; the same seed gives the same file.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Lacquer ratios of the boards, one board each (CSV default 1,2,3,4,5; MERL: the material's
+    /// r, or one value).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub ratios: Option<Vec<f64>>,
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Print one JSON object (machine, driver, every median, ratio and target verdict) on stdout;
+    /// the table then goes to stderr.
+    #[arg(long)]
+    pub json: bool,
+    /// Small sizes and two runs per figure: checks that every stage works (CI smoke run); the
+    /// figures are not meaningful.
+    #[arg(long)]
+    pub quick: bool,
+    /// Timed runs per figure, after one warm-up run (default 5, 2 with --quick).
+    #[arg(long)]
+    pub runs: Option<usize>,
+    /// Render benchmark image side in pixels (default 1024).
+    #[arg(long = "render-size")]
+    pub render_size: Option<u32>,
+    /// Prefilter face size (default 512).
+    #[arg(long = "face-size")]
+    pub face_size: Option<u32>,
+    /// Prefilter layer count K (default 8).
+    #[arg(long)]
+    pub layers: Option<u32>,
+    /// Batch benchmark: number of jobs (default 64).
+    #[arg(long = "batch-jobs")]
+    pub batch_jobs: Option<usize>,
+    /// Batch benchmark image side (default 512).
+    #[arg(long = "batch-size")]
+    pub batch_size: Option<u32>,
+    /// Start-up and memory benchmark image side (default 1024).
+    #[arg(long = "startup-size")]
+    pub startup_size: Option<u32>,
+    /// Run only these stages (comma-separated; default all).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub only: Vec<Stage>,
+}
+
+#[derive(Debug, Args)]
+pub struct MeshArgs {
+    // The help lists `BuiltinMesh::ALL`, as `render --mesh` does.
+    #[arg(value_name = "BUILTIN", help = builtin_help())]
+    pub builtin: String,
+    /// Output file: .obj (Wavefront OBJ text) or .glb (glTF 2.0 binary); replaced atomically.
+    #[arg(short = 'o', long = "output")]
+    pub output: PathBuf,
+    #[arg(long, help = segments_help())]
+    pub segments: Option<u32>,
+}
+
 impl Default for RenderArgs {
     fn default() -> Self {
         // The same defaults clap applies, for `shikki` with no arguments.
@@ -213,8 +307,25 @@ impl Default for RenderArgs {
 }
 
 /// The help of `render --mesh`: every built-in by name.
-pub(super) fn mesh_help() -> String {
-    format!("The mesh, one of: {}.", crate::raster::BuiltinMesh::list())
+fn mesh_help() -> String {
+    format!("The mesh, one of: {}.", BuiltinMesh::list())
+}
+
+fn builtin_help() -> String {
+    format!(
+        "The built-in mesh to write, one of: {}.",
+        BuiltinMesh::list()
+    )
+}
+
+fn segments_help() -> String {
+    format!(
+        "Segments around the +Y axis ({}..={}; the other direction keeps the default's \
+         proportion), for the built-ins that are tessellated; default: the tessellation \
+         `shikki render` draws.",
+        BUILTIN_SEGMENTS.start(),
+        BUILTIN_SEGMENTS.end()
+    )
 }
 
 /// `env`, `transparent` or `r,g,b` (linear, finite, ≥ 0).
@@ -273,4 +384,23 @@ pub fn parse_vec3(field: &str, s: &str) -> Result<DVec3> {
         *slot = x;
     }
     Ok(DVec3::from_array(v))
+}
+
+#[derive(Debug, Args)]
+pub struct BatchArgs {
+    /// The jobs file: a base scene plus sweeps (docs/scene.md, "Batch").
+    pub jobs: PathBuf,
+    /// Output directory (created if missing) for the images, manifest.csv and contact_sheet.png.
+    #[arg(long, default_value = "batch")]
+    pub out: PathBuf,
+    /// Render only shard I of N: the jobs whose id % N == I (for Slurm arrays, Kubernetes
+    /// indexed Jobs; docs/cluster.md).
+    #[arg(long, value_parser = crate::scene::batch::parse_shard)]
+    pub shard: Option<(usize, usize)>,
+    /// Render every job again, even when its output and manifest hash match.
+    #[arg(long)]
+    pub force: bool,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
 }

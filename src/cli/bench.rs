@@ -1,45 +1,9 @@
-//! `shikki bench [--json] [--quick]`: runs `crate::bench` and prints the table (or JSON).
+//! `shikki bench [--json] [--quick]`: runs `crate::bench` and prints the table (or JSON); the
+//! arguments are declared in `args.rs`.
 
-use clap::Args;
-
-use crate::bench::{self, BenchConfig, Stage};
+use super::args::BenchArgs;
+use crate::bench::{self, BenchConfig};
 use crate::{Error, Result};
-
-#[derive(Debug, Args)]
-pub struct BenchArgs {
-    /// Print one JSON object (machine, driver, every median, ratio and target verdict) on stdout;
-    /// the table then goes to stderr.
-    #[arg(long)]
-    pub json: bool,
-    /// Small sizes and two runs per figure: checks that every stage works (CI smoke run); the
-    /// figures are not meaningful.
-    #[arg(long)]
-    pub quick: bool,
-    /// Timed runs per figure, after one warm-up run (default 5, 2 with --quick).
-    #[arg(long)]
-    pub runs: Option<usize>,
-    /// Render benchmark image side in pixels (default 1024).
-    #[arg(long = "render-size")]
-    pub render_size: Option<u32>,
-    /// Prefilter face size (default 512).
-    #[arg(long = "face-size")]
-    pub face_size: Option<u32>,
-    /// Prefilter layer count K (default 8).
-    #[arg(long)]
-    pub layers: Option<u32>,
-    /// Batch benchmark: number of jobs (default 64).
-    #[arg(long = "batch-jobs")]
-    pub batch_jobs: Option<usize>,
-    /// Batch benchmark image side (default 512).
-    #[arg(long = "batch-size")]
-    pub batch_size: Option<u32>,
-    /// Start-up and memory benchmark image side (default 1024).
-    #[arg(long = "startup-size")]
-    pub startup_size: Option<u32>,
-    /// Run only these stages (comma-separated; default all).
-    #[arg(long, value_enum, value_delimiter = ',')]
-    pub only: Vec<Stage>,
-}
 
 impl BenchArgs {
     fn config(&self) -> BenchConfig {

@@ -6,20 +6,17 @@ use super::args::{
 use super::directions;
 use super::scene_cmd;
 use crate::compute::BrdfEvaluator;
-use crate::environment::disk_cache::{prefilter_cached, EnvironmentDiskCache};
-use crate::environment::gpu::{default_params, GpuEnvironment, GpuPrefilter};
-use crate::environment::load::load_environment;
-use crate::environment::params::ViewBlur;
-use crate::environment::PrefilterParams;
-use crate::gpu::GpuContext;
+use crate::environment::gpu::{default_params, GpuPrefilter};
+use crate::environment::load::{load_environment, LoadedEnvironment};
+use crate::environment::{EnvironmentLight, EnvironmentSource, PrefilterParams};
 use crate::model::{lacquer_brdf, LacquerMaterial};
 use crate::output::{self, PngSettings};
 use crate::raster::camera::Camera;
-use crate::raster::draw::{DrawObject, DrawScene, LacquerRenderer, RenderSettings};
 use crate::raster::lights::{default_lights, Light, MAX_LIGHTS};
 use crate::raster::mesh::BuiltinMesh;
-use crate::{Error, Result};
-use glam::DVec3;
+use crate::scene::{EnvironmentSpec, MeshSource, OutputSpec, Scene, SceneObject};
+use crate::{Error, Result, Warning};
+use glam::{DMat4, DVec3};
 use std::io::Write;
 
 pub fn run(cli: Cli) -> Result<()> {
@@ -133,28 +130,29 @@ fn lights_from(specs: &[String]) -> Result<Vec<Light>> {
         .collect()
 }
 
-/// A failed render never leaves a file at the output path: a file there from an earlier run would
-/// pass for this run's result (batch users check for existence), so it is removed, and the error
-/// says so.
+/// The flag form of `shikki render`: the scene the flags describe, rendered like any other.
 fn render(args: RenderArgs) -> Result<()> {
-    let output_path = args.output.clone();
-    render_image(args).inspect_err(|_| {
-        if let Ok(true) = output::atomic::discard_stale_output(&output_path) {
-            eprintln!(
-                "removed {} from an earlier run: it is not this run's output",
-                output_path.display()
-            );
-        }
+    let scene = scene_from_flags(&args);
+    let preset = &args.material.preset;
+    scene_cmd::render_built_scene(scene, &args.output, |scene, device| {
+        let out = &scene.output;
+        format!(
+            "{}x{}, {} sample(s), {preset} on {device}",
+            out.width, out.height, out.samples
+        )
     })
 }
 
-fn render_image(args: RenderArgs) -> Result<()> {
+/// The [`Scene`] of `shikki render --mesh … --preset … --light … --env …`: one object (the
+/// built-in mesh, unmoved, with the material of the flags), the camera that frames it, the
+/// lights, the environment and the output settings.
+fn scene_from_flags(args: &RenderArgs) -> Result<Scene> {
     let material = build_material(&args.material)?;
-    let brdf = material.brdf_params()?;
-    let fresnel = material.fresnel_table()?;
+    // Checked now, before the GPU is opened, as every other flag is.
+    material.brdf_params()?;
+    material.fresnel_table()?;
     let builtin = BuiltinMesh::parse(&args.mesh)?;
-    let mesh = builtin.mesh();
-    let camera = camera_for(builtin, &args)?;
+    let camera = camera_for(builtin, args)?;
     let lights = lights_from(&args.lights)?;
     if !args.exposure.is_finite() {
         return Err(Error::invalid(
@@ -163,84 +161,53 @@ fn render_image(args: RenderArgs) -> Result<()> {
             "must be a finite number of EV",
         ));
     }
-    let png = PngSettings {
-        exposure_ev: args.exposure,
-        tone_curve: args.tonemap,
-    };
-    // Fail before rendering if the output cannot be written.
-    output::preflight_output(&args.output)?;
-
-    let gpu = super::open_gpu()?;
-    let environment = prepare_environment(&gpu, &args.environment)?;
-    let mut renderer = LacquerRenderer::new();
-    let image = renderer.render(
-        &gpu,
-        &DrawScene {
-            objects: &[DrawObject {
-                mesh: &mesh,
-                brdf: &brdf,
-                fresnel: &fresnel,
-                view_blur: ViewBlur::of(&material),
-            }],
-            camera: &camera,
-            lights: &lights,
-            environment: environment.as_ref(),
-            background: args.background,
-        },
-        &RenderSettings {
+    Ok(Scene {
+        camera,
+        objects: vec![SceneObject {
+            mesh: MeshSource::Builtin(builtin),
+            transform: DMat4::IDENTITY,
+            material,
+        }],
+        lights,
+        environment: environment_from_flags(&args.environment),
+        output: OutputSpec {
             width: args.size.0,
             height: args.size.1,
             samples: args.samples,
+            exposure_ev: args.exposure,
+            tone_curve: args.tonemap,
+            background: args.background,
         },
-    )?;
-    gpu.check_validation()?;
-    output::write_image(&args.output, &image, &png)?;
-    eprintln!(
-        "wrote {} ({}x{}, {} sample(s), {} on {})",
-        args.output.display(),
-        args.size.0,
-        args.size.1,
-        args.samples,
-        args.material.preset,
-        gpu.info().name
-    );
-    Ok(())
+    })
 }
 
-/// Loads and prefilters the environment on the GPU (None for `--env none`), warning once about
-/// replaced pixels.
-fn prepare_environment(gpu: &GpuContext, args: &EnvironmentArgs) -> Result<Option<GpuEnvironment>> {
+/// `--env none` or a map with `--env-intensity` and `--env-rotation`; the map is loaded (and
+/// its errors reported) when the renderer prepares it.
+fn environment_from_flags(args: &EnvironmentArgs) -> EnvironmentSpec {
     if args.env.trim().eq_ignore_ascii_case("none") {
-        return Ok(None);
+        return EnvironmentSpec::None;
     }
-    let loaded = load_environment(&args.env)?;
-    warn_replaced(&loaded.source, loaded.replaced_pixels);
-    let params = default_params(gpu, loaded.image.width);
-    let cache = EnvironmentDiskCache::beside_pipeline_cache(gpu.pipeline_cache_path());
-    let env = prefilter_cached(
-        gpu,
-        &mut None,
-        cache.as_ref(),
-        &loaded.image,
-        &params,
-        args.intensity,
-        args.rotation_deg,
-    )?;
-    Ok(Some(env))
+    EnvironmentSpec::Map {
+        source: EnvironmentSource::Named(args.env.clone()),
+        light: EnvironmentLight {
+            intensity: args.intensity,
+            rotation_deg: args.rotation_deg,
+        },
+    }
 }
 
-fn warn_replaced(source: &str, replaced: usize) {
-    if replaced > 0 {
-        eprintln!(
-            "warning: {source}: {replaced} pixel value(s) were NaN, infinite or negative and \
-             were replaced by 0"
-        );
+fn warn_replaced(loaded: &LoadedEnvironment) {
+    if loaded.replaced_pixels > 0 {
+        super::print_warnings([Warning::ReplacedPixels {
+            environment: loaded.source.clone(),
+            count: loaded.replaced_pixels,
+        }]);
     }
 }
 
 fn prefilter(args: PrefilterArgs) -> Result<()> {
     let loaded = load_environment(&args.env)?;
-    warn_replaced(&loaded.source, loaded.replaced_pixels);
+    warn_replaced(&loaded);
     let mut params = PrefilterParams::for_source_width(loaded.image.width);
     if let Some(face) = args.face_size {
         params.face_size = face;
@@ -341,7 +308,8 @@ fn info() -> Result<()> {
          max texel buffer:     {} texels\n\
          MSAA sample counts:   {:?}\n\
          timestamps:           {} (period {} ns)\n\
-         ray queries:          {}\n",
+         ray queries:          {}\n\
+         driver quirks:        {}\n",
         i.name,
         i.device_type,
         i.driver_name,
@@ -366,6 +334,7 @@ fn info() -> Result<()> {
         },
         i.timestamp_period_ns,
         i.ray_query.summary(),
+        i.quirks.summary(),
     );
     write_stdout(&text)
 }

@@ -1,10 +1,10 @@
-//! `shikki fit` and `shikki synth`: argument parsing and file plumbing only; the fit, the formats
-//! and the report live in `crate::fit`, the material file in `crate::model::material_file`.
+//! `shikki fit` and `shikki synth`: file plumbing only; the arguments are declared in `args.rs`,
+//! the fit, the formats and the report live in `crate::fit`, the material file in
+//! `crate::model::material_file`.
 
 use std::path::{Path, PathBuf};
 
-use clap::Args;
-
+use super::args::{FitArgs, SynthArgs};
 use crate::fit::estimate::FitOptions;
 use crate::fit::synth::{synthesize_csv, synthesize_merl, Noise, DEFAULT_RATIOS};
 use crate::fit::{fit_measurements, read_measurements, report};
@@ -12,48 +12,6 @@ use crate::model::material_file::{load_material_file, material_to_toml};
 use crate::model::{LacquerMaterial, PRESET_NAMES};
 use crate::output::atomic::write_atomically;
 use crate::{Error, Result};
-
-#[derive(Debug, Args)]
-pub struct FitArgs {
-    /// Measurements: a goniophotometer CSV (.csv, see docs/measurements.md) or a MERL BRDF
-    /// (.binary).
-    pub data: PathBuf,
-    /// The material TOML to write; the Fresnel table goes beside it as <name>.fresnel.csv.
-    #[arg(short = 'o', long = "output", value_name = "MATERIAL.toml")]
-    pub output: PathBuf,
-    /// Also write a report (residuals, tables, PNG plots) into this directory.
-    #[arg(long, value_name = "DIR")]
-    pub report: Option<PathBuf>,
-    /// Split k_d·g(r)·f(N·V), which the data fix only as a product, with this material's
-    /// f(1) = a + b and g at the least-lacquer board (a preset name or a material TOML); it also
-    /// supplies β_* and the IOR, which reflectance data cannot show. Default: f(1) = g(1) = 1.
-    #[arg(long = "normalise-like", value_name = "PRESET|FILE.toml")]
-    pub normalise_like: Option<String>,
-}
-
-#[derive(Debug, Args)]
-#[command(group(clap::ArgGroup::new("source").required(true).args(["material", "preset"])))]
-pub struct SynthArgs {
-    /// A material TOML to generate data from.
-    pub material: Option<PathBuf>,
-    /// A preset instead of a file: smooth, rough, smooth-black, smooth-red, rough-black,
-    /// rough-red.
-    #[arg(long)]
-    pub preset: Option<String>,
-    /// Output: goniophotometer CSV (.csv) or MERL BRDF (.binary, one board).
-    #[arg(short = 'o', long = "output", value_name = "DATA.csv")]
-    pub output: PathBuf,
-    /// Multiplicative Gaussian noise σ (0.02 = 2 %).
-    #[arg(long, default_value_t = 0.0)]
-    pub noise: f64,
-    /// Seed of the noise; the same seed gives the same file.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Lacquer ratios of the boards, one board each (CSV default 1,2,3,4,5; MERL: the material's
-    /// r, or one value).
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
-    pub ratios: Option<Vec<f64>>,
-}
 
 pub fn run_fit(args: FitArgs) -> Result<()> {
     if !has_extension(&args.output, "toml") {

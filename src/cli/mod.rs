@@ -32,6 +32,13 @@ pub(crate) fn open_gpu() -> crate::Result<CliGpu> {
     Ok(CliGpu(gpu))
 }
 
+/// The library returns warnings; the CLI prints each as `warning: …` on stderr.
+pub(crate) fn print_warnings(warnings: impl IntoIterator<Item = crate::Warning>) {
+    for warning in warnings {
+        eprintln!("warning: {warning}");
+    }
+}
+
 impl std::ops::Deref for CliGpu {
     type Target = crate::gpu::GpuContext;
     fn deref(&self) -> &Self::Target {

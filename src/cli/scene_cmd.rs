@@ -1,36 +1,16 @@
-//! `shikki render SCENE.toml`, the default scene, and `shikki batch`: argument handling only; the
-//! scene schema, renderer and batch runner live in `crate::scene`.
+//! `shikki render` in every form (flags, a scene file, the default scene) and `shikki batch`:
+//! argument handling only. Every render form builds a `Scene` and goes through
+//! [`render_built_scene`]; the scene schema, renderer and batch runner live in `crate::scene`.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use clap::Args;
-
-use super::args::RenderArgs;
+use super::args::{BatchArgs, RenderArgs};
 use crate::output::{self, OutputFormat, PngSettings};
 use crate::scene::batch::{self, BatchOptions, BatchPlan};
 use crate::scene::{default_scene, Scene, SceneDocument, SceneRenderer};
 use crate::{Error, Result};
-
-#[derive(Debug, Args)]
-pub struct BatchArgs {
-    /// The jobs file: a base scene plus sweeps (docs/scene.md, "Batch").
-    pub jobs: PathBuf,
-    /// Output directory (created if missing) for the images, manifest.csv and contact_sheet.png.
-    #[arg(long, default_value = "batch")]
-    pub out: PathBuf,
-    /// Render only shard I of N: the jobs whose id % N == I (for Slurm arrays, Kubernetes
-    /// indexed Jobs; docs/cluster.md).
-    #[arg(long, value_parser = batch::parse_shard)]
-    pub shard: Option<(usize, usize)>,
-    /// Render every job again, even when its output and manifest hash match.
-    #[arg(long)]
-    pub force: bool,
-    /// No progress bar.
-    #[arg(long)]
-    pub quiet: bool,
-}
 
 /// Whether `shikki render` was given no scene and nothing that describes one (mesh, preset,
 /// material file, camera, lights, environment, background): then it renders [`default_scene`]. Output flags
@@ -60,7 +40,7 @@ pub fn render_default(args: &RenderArgs) -> Result<()> {
     scene.output.samples = args.samples;
     scene.output.exposure_ev = args.exposure;
     scene.output.tone_curve = args.tonemap;
-    render_to_file(&scene, &args.output)
+    render_built_scene(Ok(scene), &args.output, scene_summary)
 }
 
 /// `shikki render SCENE.toml [--set path=value]… [-o FILE]`. `--set` paths are scene paths
@@ -68,7 +48,7 @@ pub fn render_default(args: &RenderArgs) -> Result<()> {
 /// with `[output] format = "exr"` and no `-o`, the file is shikki.exr.
 pub fn render_scene_file(scene_path: &Path, sets: &[String], output_path: &Path) -> Result<()> {
     let result = scene_and_path(scene_path, sets, output_path)
-        .and_then(|(scene, path)| render_to_file(&scene, &path));
+        .and_then(|(scene, path)| render_built_scene(Ok(scene), &path, scene_summary));
     if result.is_err() {
         // The scene may have failed before its output path (and format) was known.
         for path in [output_path.to_path_buf(), output_path.with_extension("exr")] {
@@ -96,9 +76,27 @@ fn scene_and_path(
     Ok((scene, path))
 }
 
-/// Renders `scene` to `path` (format by extension). A failure leaves no file at `path`.
-fn render_to_file(scene: &Scene, path: &Path) -> Result<()> {
-    let result = render_and_write(scene, path);
+/// What `wrote PATH (…)` says of a scene, given the device's name.
+fn scene_summary(scene: &Scene, device: &str) -> String {
+    format!(
+        "{}x{}, {} object(s), {} sample(s) on {device}",
+        scene.output.width,
+        scene.output.height,
+        scene.objects.len(),
+        scene.output.samples
+    )
+}
+
+/// Renders `scene` (or reports why it could not be built) to `path`, format by extension, then
+/// prints `wrote PATH (summary)`. A failure leaves no file at `path`: a file there from an
+/// earlier run would pass for this run's result (batch users check for existence), so it is
+/// removed, and the CLI says so.
+pub fn render_built_scene(
+    scene: Result<Scene>,
+    path: &Path,
+    summary: impl FnOnce(&Scene, &str) -> String,
+) -> Result<()> {
+    let result = scene.and_then(|scene| render_and_write(&scene, path, summary));
     if result.is_err() {
         discard_stale(path);
     }
@@ -114,7 +112,13 @@ fn discard_stale(path: &Path) {
     }
 }
 
-fn render_and_write(scene: &Scene, path: &Path) -> Result<()> {
+/// Renders and writes. The renderer's warnings are printed whether or not the render succeeded
+/// (one may explain the failure).
+fn render_and_write(
+    scene: &Scene,
+    path: &Path,
+    summary: impl FnOnce(&Scene, &str) -> String,
+) -> Result<()> {
     output::preflight_output(path)?;
     let png = PngSettings {
         exposure_ev: scene.output.exposure_ev,
@@ -123,16 +127,13 @@ fn render_and_write(scene: &Scene, path: &Path) -> Result<()> {
     png.validate()?;
     let gpu = super::open_gpu()?;
     let mut renderer = SceneRenderer::new(&gpu)?;
-    let image = renderer.render(&gpu, scene)?;
-    output::write_image(path, &image, &png)?;
+    let image = renderer.render(&gpu, scene);
+    super::print_warnings(renderer.take_warnings());
+    output::write_image(path, &image?, &png)?;
     eprintln!(
-        "wrote {} ({}x{}, {} object(s), {} sample(s) on {})",
+        "wrote {} ({})",
         path.display(),
-        scene.output.width,
-        scene.output.height,
-        scene.objects.len(),
-        scene.output.samples,
-        gpu.info().name
+        summary(scene, &gpu.info().name)
     );
     Ok(())
 }

@@ -1,30 +1,29 @@
 //! Evaluates the GLSL lacquer BRDF (shaders/common/lacquer_brdf.glsl, the same code the fragment
 //! shader runs) for a list of (N, V, L) triples in a compute shader.
 
+use crate::gpu::shaders::interface::{
+    BrdfEvalParams, ObjectMaterial, BRDF_EVAL_DIRECTIONS_BINDING, BRDF_EVAL_PARAMS_BINDING,
+    BRDF_EVAL_VALUES_BINDING, BRDF_EVAL_WORKGROUP, FRESNEL_KNOTS_BINDING,
+};
 use crate::gpu::{
     Access, Binding, BindingKind, BufferDesc, BufferUsage, ComputePipeline, GpuContext, Resource,
 };
 use crate::model::{BrdfParams, FresnelTable};
-use crate::shading;
+use crate::raster::draw::frame::fresnel_knots;
 use crate::Result;
 use glam::DVec3;
-
-/// Threads per workgroup; must equal `local_size_x` in brdf_eval.comp.
-const WORKGROUP_SIZE: u32 = 64;
 
 /// Rows per submit, so a huge input never needs one enormous buffer. Vulkan guarantees a storage
 /// buffer range of at least 2^27 bytes; 2^20 rows × 48 bytes is under half of that.
 const ROWS_PER_BATCH: usize = 1 << 20;
 
-/// `Params` in brdf_eval.comp (std140; all members 16 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct EvalParams {
-    material: [f32; 4],
-    albedo_count: [f32; 4],
-    material_lo: [f32; 4],
-    row_count: [u32; 4],
-}
+/// brdf_eval.comp's set.
+const BINDINGS: [Binding; 4] = [
+    Binding::new(BRDF_EVAL_PARAMS_BINDING, BindingKind::UniformBuffer),
+    Binding::new(FRESNEL_KNOTS_BINDING, BindingKind::UniformTexelBuffer),
+    Binding::new(BRDF_EVAL_DIRECTIONS_BINDING, BindingKind::StorageBuffer),
+    Binding::new(BRDF_EVAL_VALUES_BINDING, BindingKind::StorageBuffer),
+];
 
 /// The compute pipeline, made once and reused for every call.
 pub struct BrdfEvaluator {
@@ -33,16 +32,10 @@ pub struct BrdfEvaluator {
 
 impl BrdfEvaluator {
     pub fn new(gpu: &GpuContext) -> Result<Self> {
-        let bindings = [
-            Binding::new(0, BindingKind::UniformBuffer),
-            Binding::new(1, BindingKind::UniformTexelBuffer),
-            Binding::new(2, BindingKind::StorageBuffer),
-            Binding::new(3, BindingKind::StorageBuffer),
-        ];
         let pipeline = gpu.create_compute_pipeline(
             "brdf_eval.comp",
             crate::gpu::shaders::BRDF_EVAL_COMP,
-            &bindings,
+            &BINDINGS,
             0,
         )?;
         Ok(Self { pipeline })
@@ -75,14 +68,11 @@ impl BrdfEvaluator {
         if rows == 0 {
             return Ok(Vec::new());
         }
-        let [material, albedo_count, material_lo] = shading::material_vec4s(brdf, fresnel);
-        let params = EvalParams {
-            material,
-            albedo_count,
-            material_lo,
+        let params = BrdfEvalParams {
+            material: ObjectMaterial::new(brdf, fresnel),
             row_count: [rows as u32, 0, 0, 0],
         };
-        let knots = shading::fresnel_knots(fresnel);
+        let knots = fresnel_knots(fresnel);
         let directions: Vec<[f32; 4]> = triples
             .iter()
             .flat_map(|triple| {
@@ -116,15 +106,15 @@ impl BrdfEvaluator {
         let set = gpu.create_descriptor_set(
             self.pipeline.layout(),
             &[
-                (0, Resource::Buffer(&params_buf)),
-                (1, Resource::TexelBuffer(&knots_buf)),
-                (2, Resource::Buffer(&dirs_buf)),
-                (3, Resource::Buffer(&values_buf)),
+                (BRDF_EVAL_PARAMS_BINDING, Resource::Buffer(&params_buf)),
+                (FRESNEL_KNOTS_BINDING, Resource::TexelBuffer(&knots_buf)),
+                (BRDF_EVAL_DIRECTIONS_BINDING, Resource::Buffer(&dirs_buf)),
+                (BRDF_EVAL_VALUES_BINDING, Resource::Buffer(&values_buf)),
             ],
         )?;
         gpu.submit_and_wait(|rec| {
             rec.bind_compute(&self.pipeline, &set);
-            rec.dispatch((rows as u32).div_ceil(WORKGROUP_SIZE), 1, 1);
+            rec.dispatch((rows as u32).div_ceil(BRDF_EVAL_WORKGROUP), 1, 1);
             rec.memory_barrier(Access::ComputeShaderWrite, Access::HostRead);
             Ok(())
         })?;

@@ -12,18 +12,17 @@
 //! * **Trust.** Nothing in a file is trusted: the header's magic, version and sizes are checked
 //!   against limits before any allocation, the payload's SHA-256 must match, the key stored inside
 //!   must be the one asked for, and every layer must have the size the parameters imply. A file
-//!   failing any check is ignored with a warning (and rewritten by the next prefilter).
+//!   failing any check is ignored with a [`Warning`] for the caller (and rewritten by the next
+//!   prefilter).
 //! * **Writes** are atomic (`output::atomic`): a crash never leaves a torn cache file.
 
 use std::path::{Path, PathBuf};
 
 use sha2::{Digest, Sha256};
 
-use super::gpu::{GpuEnvironment, GpuPrefilter};
 use super::image::{CubeImage, Equirect, PrefilteredEnvironment};
-use super::params::PrefilterParams;
-use crate::gpu::GpuContext;
-use crate::{Error, Result};
+use super::params::{EnvironmentLight, PrefilterParams};
+use crate::{Error, Result, Warning};
 
 const MAGIC: &[u8; 8] = b"SHKENV\r\n";
 const FORMAT_VERSION: u32 = 1;
@@ -45,12 +44,7 @@ pub struct EnvironmentDiskCache {
 pub struct CacheKey([u8; 32]);
 
 impl CacheKey {
-    pub fn new(
-        source: &Equirect,
-        params: &PrefilterParams,
-        intensity: f64,
-        rotation_deg: f64,
-    ) -> Self {
+    pub fn new(source: &Equirect, params: &PrefilterParams, light: EnvironmentLight) -> Self {
         let mut hash = Sha256::new();
         hash.update(b"shikki prefiltered environment\0");
         hash.update(env!("CARGO_PKG_VERSION").as_bytes());
@@ -60,7 +54,12 @@ impl CacheKey {
         hash.update(bytemuck::cast_slice::<[f32; 3], u8>(&source.pixels));
         hash.update(params.face_size.to_le_bytes());
         hash.update(params.layers.to_le_bytes());
-        for x in [params.beta_min, params.beta_max, intensity, rotation_deg] {
+        for x in [
+            params.beta_min,
+            params.beta_max,
+            light.intensity,
+            light.rotation_deg,
+        ] {
             hash.update(x.to_bits().to_le_bytes());
         }
         CacheKey(hash.finalize().into())
@@ -95,8 +94,13 @@ impl EnvironmentDiskCache {
     }
 
     /// The cached environment for `key`, if a valid file exists. A missing file is silent; an
-    /// invalid one is reported on stderr and ignored.
-    pub fn load(&self, key: &CacheKey, params: &PrefilterParams) -> Option<PrefilteredEnvironment> {
+    /// invalid one is ignored with a warning in `warnings`.
+    pub fn load(
+        &self,
+        key: &CacheKey,
+        params: &PrefilterParams,
+        warnings: &mut Vec<Warning>,
+    ) -> Option<PrefilteredEnvironment> {
         let path = self.path(key);
         let size = std::fs::metadata(&path).ok()?.len();
         let result = if size > MAX_FILE_BYTES {
@@ -109,11 +113,7 @@ impl EnvironmentDiskCache {
         match result {
             Ok(env) => Some(env),
             Err(reason) => {
-                eprintln!(
-                    "warning: ignoring the environment cache file {}: {reason}; it will be \
-                     rebuilt",
-                    path.display()
-                );
+                warnings.push(Warning::CacheFileInvalid { path, reason });
                 None
             }
         }
@@ -127,46 +127,6 @@ impl EnvironmentDiskCache {
         })?;
         crate::output::atomic::write_atomically(&self.path(key), &encode(key, env))
     }
-}
-
-/// The prefiltered environment of `source`: from `cache` when it holds a valid file, else
-/// prefiltered on the GPU (building `prefilter`'s pipelines on first use) and stored in `cache`.
-/// A cache that cannot be read or written costs a warning, never the render.
-pub fn prefilter_cached(
-    gpu: &GpuContext,
-    prefilter: &mut Option<GpuPrefilter>,
-    cache: Option<&EnvironmentDiskCache>,
-    source: &Equirect,
-    params: &PrefilterParams,
-    intensity: f64,
-    rotation_deg: f64,
-) -> Result<GpuEnvironment> {
-    let key = cache.map(|_| CacheKey::new(source, params, intensity, rotation_deg));
-    if let (Some(cache), Some(key)) = (cache, &key) {
-        if let Some(host) = cache.load(key, params) {
-            match GpuEnvironment::upload(gpu, &host) {
-                Ok(env) => return Ok(env),
-                Err(e) => eprintln!(
-                    "warning: ignoring the environment cache file {}: {e}",
-                    cache.path(key).display()
-                ),
-            }
-        }
-    }
-    if prefilter.is_none() {
-        *prefilter = Some(GpuPrefilter::new(gpu)?);
-    }
-    let Some(pipelines) = prefilter.as_ref() else {
-        return Err(Error::invalid("prefilter", "missing", "internal error"));
-    };
-    let env = pipelines.run(gpu, source, params, intensity, rotation_deg)?;
-    if let (Some(cache), Some(key)) = (cache, &key) {
-        let stored = env.read_back(gpu).and_then(|host| cache.store(key, &host));
-        if let Err(e) = stored {
-            eprintln!("warning: the prefiltered environment was not cached: {e}");
-        }
-    }
-    Ok(env)
 }
 
 /// The file's bytes: header, then the payload (layer count, betas, each layer's face size and
@@ -338,7 +298,7 @@ mod tests {
             beta_max: 1.0,
         };
         let source = Equirect::constant(4, 2, [1.0, 0.5, 0.25]);
-        let key = CacheKey::new(&source, &params, 1.0, 0.0);
+        let key = CacheKey::new(&source, &params, EnvironmentLight::default());
         let cube = |face: u32, v: f32| CubeImage {
             face_size: face,
             texels: (0..6 * face * face)
@@ -366,15 +326,19 @@ mod tests {
         let (key, params, _) = sample();
         let source = Equirect::constant(4, 2, [1.0, 0.5, 0.25]);
         let other_pixels = Equirect::constant(4, 2, [1.0, 0.5, 0.26]);
-        assert_eq!(key, CacheKey::new(&source, &params, 1.0, 0.0));
-        assert_ne!(key, CacheKey::new(&other_pixels, &params, 1.0, 0.0));
-        assert_ne!(key, CacheKey::new(&source, &params, 2.0, 0.0));
-        assert_ne!(key, CacheKey::new(&source, &params, 1.0, 90.0));
+        let light = |intensity, rotation_deg| EnvironmentLight {
+            intensity,
+            rotation_deg,
+        };
+        assert_eq!(key, CacheKey::new(&source, &params, light(1.0, 0.0)));
+        assert_ne!(key, CacheKey::new(&other_pixels, &params, light(1.0, 0.0)));
+        assert_ne!(key, CacheKey::new(&source, &params, light(2.0, 0.0)));
+        assert_ne!(key, CacheKey::new(&source, &params, light(1.0, 90.0)));
         let more_layers = PrefilterParams {
             layers: 3,
             ..params
         };
-        assert_ne!(key, CacheKey::new(&source, &more_layers, 1.0, 0.0));
+        assert_ne!(key, CacheKey::new(&source, &more_layers, light(1.0, 0.0)));
     }
 
     #[test]
@@ -409,9 +373,15 @@ mod tests {
         let cache = EnvironmentDiskCache::new(&dir);
         let (key, params, env) = sample();
         cache.store(&key, &env).unwrap();
-        assert_eq!(cache.load(&key, &params), Some(env));
+        let mut warnings = Vec::new();
+        assert_eq!(cache.load(&key, &params, &mut warnings), Some(env));
+        assert!(warnings.is_empty(), "{warnings:?}");
         std::fs::write(cache.path(&key), b"SHKENV\r\n broken").unwrap();
-        assert_eq!(cache.load(&key, &params), None);
+        assert_eq!(cache.load(&key, &params, &mut warnings), None);
+        assert!(
+            matches!(&warnings[..], [Warning::CacheFileInvalid { path, .. }] if *path == cache.path(&key)),
+            "one warning names the ignored file: {warnings:?}"
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -1,42 +1,59 @@
-//! The prefilter on the GPU: the four compute steps of `mod.rs` in one submit, with barriers
-//! between the steps, ending in sampled cube images for the fragment shader. No CPU fallback:
-//! the CPU twin (`oracle.rs`) exists for tests and benchmarks only.
+//! The prefilter on the GPU: the oracle's steps (`oracle.rs`), each a function of the same name
+//! recording one compute step, all in one submit with barriers between them, ending in sampled
+//! cube images for the fragment shader. No CPU fallback: the CPU twin exists for tests and
+//! benchmarks only.
+//!
+//! ```text
+//! equirect ──equirect_to_cube──► base (face N) ──downsample──► mips N/2 … ──┬─ blur_layer(β_k) ─► layer k
+//!                                   └──────────────────────────► layer 0     └─ irradiance ──────► E(n)
+//! ```
+//!
+//! Every cube lives in a storage buffer while the steps write it and is read as a texel buffer
+//! (quirk `ssbo_gather_is_per_lane`); the last step copies the buffers into the cube images.
 
 use super::image::{CubeImage, Equirect, PrefilteredEnvironment};
 use super::params::{
-    equirect_supersample, PrefilterParams, LOBE_CUTOFF, MAX_FACE_SIZE, MIN_LAYER_FACE,
+    equirect_supersample, LayerPlan, PrefilterParams, LOBE_CUTOFF, MAX_FACE_SIZE, MIN_LAYER_FACE,
+};
+use crate::gpu::shaders::interface::{
+    BlurLayerParams, DownsampleParams, EquirectToCubeParams, IrradianceParams, NearHeader,
+    NEAR_TEXELS_BINDING, PREFILTER_DEST_BINDING, PREFILTER_SOURCE_BINDING, PREFILTER_WORKGROUP,
 };
 use crate::gpu::{
-    Access, AdapterInfo, Binding, BindingKind, Buffer, BufferDesc, BufferUsage, ComputePipeline,
-    DescriptorSet, GpuContext, Image, ImageDesc, ImageUsage, ImageUse, Layout, Recorder, Resource,
+    Access, AdapterInfo, Binding, BindingKind, Buffer, BufferDesc, ComputePipeline, DescriptorSet,
+    GpuContext, Image, ImageUsage, ImageUse, Layout, Recorder,
 };
 use crate::{Error, Result};
+use std::mem::{offset_of, size_of};
 
+mod run;
 mod upload;
 
-/// Threads per workgroup side; must equal local_size_x/y in the prefilter shaders.
-const WORKGROUP: u32 = 8;
+use run::PrefilterRun;
 
-/// Steps that gather from a cube read it as a texel buffer (see `BindingKind::UniformTexelBuffer`).
+/// Steps 2–4 read the cube they gather from as a texel buffer and write a storage buffer.
 const TEXEL_IO_BINDINGS: [Binding; 2] = [
-    Binding::new(0, BindingKind::UniformTexelBuffer),
-    Binding::new(1, BindingKind::StorageBuffer),
+    Binding::new(PREFILTER_SOURCE_BINDING, BindingKind::UniformTexelBuffer),
+    Binding::new(PREFILTER_DEST_BINDING, BindingKind::StorageBuffer),
 ];
 
 /// Step 1: the equirect (texel buffer), the cube, and the list of texels the near pass finishes
 /// (see `equirect_to_cube_body.glsl`).
 const TO_CUBE_BINDINGS: [Binding; 3] = [
-    Binding::new(0, BindingKind::UniformTexelBuffer),
-    Binding::new(1, BindingKind::StorageBuffer),
-    Binding::new(2, BindingKind::StorageBuffer),
+    Binding::new(PREFILTER_SOURCE_BINDING, BindingKind::UniformTexelBuffer),
+    Binding::new(PREFILTER_DEST_BINDING, BindingKind::StorageBuffer),
+    Binding::new(NEAR_TEXELS_BINDING, BindingKind::StorageBuffer),
 ];
 
-/// Byte offset of the near pass's indirect dispatch arguments in the near-texel list (after its
-/// count), and of the texel indices (after the four-word header).
-const NEAR_DISPATCH_OFFSET: u64 = 4;
-const NEAR_HEADER_BYTES: u64 = 16;
+/// Byte offset of the near pass's indirect dispatch arguments in the near-texel list.
+const NEAR_DISPATCH_OFFSET: u64 = offset_of!(NearHeader, dispatch_x) as u64;
 
-/// The four prefilter pipelines, made once.
+/// The size of a push-constant block, for its pipeline layout.
+fn push_size<T>() -> u32 {
+    size_of::<T>() as u32
+}
+
+/// The prefilter pipelines, one per step, made once.
 pub struct GpuPrefilter {
     equirect_to_cube: ComputePipeline,
     /// Step 1's second dispatch, which finishes near-edge sub-samples in double precision; only
@@ -76,56 +93,53 @@ fn cube_bytes(face: u32) -> u64 {
     6 * u64::from(face) * u64::from(face) * 16
 }
 
+/// Workgroups along each side of a face: one per `PREFILTER_WORKGROUP`² tile.
 fn groups(face: u32) -> u32 {
-    face.div_ceil(WORKGROUP)
+    face.div_ceil(PREFILTER_WORKGROUP)
 }
 
 impl GpuPrefilter {
     pub fn new(gpu: &GpuContext) -> Result<Self> {
         use crate::gpu::shaders::*;
         let f64 = gpu.info().shader_float64;
+        let to_cube = push_size::<EquirectToCubeParams>();
+        let (to_cube_name, to_cube_spirv) = match f64 {
+            true => ("equirect_to_cube_f64.comp", EQUIRECT_TO_CUBE_F64_COMP),
+            false => ("equirect_to_cube.comp", EQUIRECT_TO_CUBE_COMP),
+        };
+        let step =
+            |name, spirv, push| gpu.create_compute_pipeline(name, spirv, &TEXEL_IO_BINDINGS, push);
         Ok(Self {
             equirect_to_cube: gpu.create_compute_pipeline(
-                if f64 {
-                    "equirect_to_cube_f64.comp"
-                } else {
-                    "equirect_to_cube.comp"
-                },
-                if f64 {
-                    EQUIRECT_TO_CUBE_F64_COMP
-                } else {
-                    EQUIRECT_TO_CUBE_COMP
-                },
+                to_cube_name,
+                to_cube_spirv,
                 &TO_CUBE_BINDINGS,
-                28,
+                to_cube,
             )?,
             equirect_near: if f64 {
                 Some(gpu.create_compute_pipeline(
                     "equirect_to_cube_near.comp",
                     EQUIRECT_TO_CUBE_NEAR_COMP,
                     &TO_CUBE_BINDINGS,
-                    28,
+                    to_cube,
                 )?)
             } else {
                 None
             },
-            downsample: gpu.create_compute_pipeline(
+            downsample: step(
                 "downsample.comp",
                 DOWNSAMPLE_COMP,
-                &TEXEL_IO_BINDINGS,
-                4,
+                push_size::<DownsampleParams>(),
             )?,
-            blur_layer: gpu.create_compute_pipeline(
+            blur_layer: step(
                 "prefilter_layers.comp",
                 PREFILTER_LAYERS_COMP,
-                &TEXEL_IO_BINDINGS,
-                12,
+                push_size::<BlurLayerParams>(),
             )?,
-            irradiance: gpu.create_compute_pipeline(
+            irradiance: step(
                 "irradiance.comp",
                 IRRADIANCE_COMP,
-                &TEXEL_IO_BINDINGS,
-                4,
+                push_size::<IrradianceParams>(),
             )?,
         })
     }
@@ -155,182 +169,48 @@ impl GpuPrefilter {
         params.validate()?;
         check_source(source, intensity, rotation_deg)?;
         check_device_limits(gpu.info(), source, params)?;
-        let plan = params.plan();
-        let mip_faces = params.mip_faces();
-
-        let pixels: Vec<[f32; 4]> = source
-            .pixels
-            .iter()
-            .map(|p| [p[0], p[1], p[2], 1.0])
-            .collect();
-        let mut source_buf = gpu.create_buffer(BufferDesc::upload(
-            "environment equirect",
-            (pixels.len() * 16) as u64,
-            BufferUsage::UNIFORM_TEXEL,
-        ))?;
-        source_buf.write(&pixels)?;
-
-        let storage = BufferUsage::STORAGE | BufferUsage::TRANSFER_SRC | BufferUsage::UNIFORM_TEXEL;
-        let mips: Vec<Buffer> = mip_faces
-            .iter()
-            .map(|&m| gpu.create_buffer(BufferDesc::device_local("mip", cube_bytes(m), storage)))
-            .collect::<std::result::Result<_, _>>()?;
-        let mip_of = |face: u32| -> Result<&Buffer> {
-            mip_faces
-                .iter()
-                .position(|&m| m == face)
-                .map(|i| &mips[i])
-                .ok_or_else(|| Error::invalid("face size", face, "internal: no mip of that size"))
-        };
-        let mut layer_buffers = Vec::new();
-        for layer in plan.iter().skip(1) {
-            let buf = gpu.create_buffer(BufferDesc::device_local(
-                "layer",
-                cube_bytes(layer.face_size),
-                storage,
-            ))?;
-            layer_buffers.push((layer.face_size, buf));
-        }
-        let irr_face = params.irradiance_face();
-        let irradiance_buf = gpu.create_buffer(BufferDesc::device_local(
-            "irradiance",
-            cube_bytes(irr_face),
-            storage,
-        ))?;
-
-        // Texels whose sub-samples lie near a pixel edge: at most every texel of the base cube.
-        let near_capacity = if self.equirect_near.is_some() {
-            6 * u64::from(params.face_size) * u64::from(params.face_size)
-        } else {
-            0
-        };
-        let mut near_texels = gpu.create_buffer(BufferDesc::upload(
-            "near-edge texels",
-            NEAR_HEADER_BYTES + 4 * near_capacity,
-            BufferUsage::STORAGE | BufferUsage::INDIRECT,
-        ))?;
-        // Count 0; the near pass's dispatch (0, 1, 1) groups, counted up by step 1.
-        near_texels.write(&[0u32, 0, 1, 1])?;
-
-        // Descriptor sets, made before recording so they outlive the submit.
-        let set =
-            |pipeline: &ComputePipeline, src: &Buffer, dst: &Buffer| -> Result<DescriptorSet> {
-                Ok(gpu.create_descriptor_set(
-                    pipeline.layout(),
-                    &[(0, Resource::TexelBuffer(src)), (1, Resource::Buffer(dst))],
-                )?)
-            };
-        let to_cube_resources = [
-            (0, Resource::TexelBuffer(&source_buf)),
-            (1, Resource::Buffer(&mips[0])),
-            (2, Resource::Buffer(&near_texels)),
-        ];
-        let to_cube_set =
-            gpu.create_descriptor_set(self.equirect_to_cube.layout(), &to_cube_resources)?;
-        let near_set = match &self.equirect_near {
-            Some(near) => Some(gpu.create_descriptor_set(near.layout(), &to_cube_resources)?),
-            None => None,
-        };
-        let down_sets: Vec<DescriptorSet> = mips
-            .windows(2)
-            .map(|pair| set(&self.downsample, &pair[0], &pair[1]))
-            .collect::<Result<_>>()?;
-        let blur_sets: Vec<DescriptorSet> = layer_buffers
-            .iter()
-            .map(|(face, dst)| set(&self.blur_layer, mip_of(*face)?, dst))
-            .collect::<Result<_>>()?;
-        let irr_set = set(&self.irradiance, mip_of(irr_face)?, &irradiance_buf)?;
-
-        // The sampled cube images: layer 0 is the base mip itself.
-        let sampled = cube_image_usage();
-        let mut layers =
-            vec![gpu.create_image(ImageDesc::cube("layer 0", params.face_size).usage(sampled))?];
-        for (face, _) in &layer_buffers {
-            layers.push(gpu.create_image(ImageDesc::cube("layer", *face).usage(sampled))?);
-        }
-        let irradiance =
-            gpu.create_image(ImageDesc::cube("irradiance", irr_face).usage(sampled))?;
-
+        let run = PrefilterRun::new(gpu, self, source, params)?;
         let (rot_sin, rot_cos) = rotation_deg.to_radians().sin_cos();
+        let to_cube = EquirectToCubeParams {
+            src_width: source.width,
+            src_height: source.height,
+            face_size: params.face_size,
+            intensity: intensity as f32,
+            rotation_cos: rot_cos as f32,
+            rotation_sin: rot_sin as f32,
+            supersample: equirect_supersample(source.width, params.face_size),
+        };
         // Timestamps: start, after step 1, after the mips, after each layer, after irradiance, end.
-        let stamps = gpu.create_timestamp_pool(layer_buffers.len() as u32 + 5)?;
-        let mut stamp = 0u32;
+        let stamps = gpu.create_timestamp_pool(run.buffers.layers.len() as u32 + 5)?;
         gpu.submit_and_wait(|rec| {
             rec.reset_timestamps(&stamps);
+            let mut stamp = 0;
             let mut mark = |rec: &mut Recorder<'_>| {
                 rec.timestamp(&stamps, stamp);
                 stamp += 1;
             };
             mark(rec);
-            // 1. equirect → cube
-            let to_cube_constants = [
-                source.width,
-                source.height,
-                params.face_size,
-                (intensity as f32).to_bits(),
-                (rot_cos as f32).to_bits(),
-                (rot_sin as f32).to_bits(),
-                equirect_supersample(source.width, params.face_size),
-            ];
-            rec.bind_compute(&self.equirect_to_cube, &to_cube_set);
-            rec.push_constants(
-                &self.equirect_to_cube,
-                bytemuck::cast_slice(&to_cube_constants),
-            );
-            rec.dispatch(groups(params.face_size), groups(params.face_size), 6);
-            if let (Some(near), Some(near_set)) = (&self.equirect_near, &near_set) {
-                // The list and its dispatch size, and the partial texels it rewrites.
-                rec.memory_barrier(Access::ComputeShaderWrite, Access::IndirectCommandRead);
-                rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
-                rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderWrite);
-                rec.bind_compute(near, near_set);
-                rec.push_constants(near, bytemuck::cast_slice(&to_cube_constants));
-                rec.dispatch_indirect(&near_texels, NEAR_DISPATCH_OFFSET);
-            }
-            rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
+            self.equirect_to_cube(rec, &run, &to_cube);
             mark(rec);
-            // 2. mip chain, each level from the previous one
-            for (level, down_set) in down_sets.iter().enumerate() {
-                let face = mip_faces[level + 1];
-                rec.bind_compute(&self.downsample, down_set);
-                rec.push_constants(&self.downsample, bytemuck::bytes_of(&face));
-                rec.dispatch(groups(face), groups(face), 6);
-                rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
+            for (set, &face) in run.sets.downsample.iter().zip(&run.buffers.mip_faces[1..]) {
+                self.downsample(rec, set, face);
             }
             mark(rec);
-            // 3. blurred layers and 4. irradiance: independent of each other
-            for ((layer, (face, _)), blur_set) in
-                plan.iter().skip(1).zip(&layer_buffers).zip(&blur_sets)
-            {
-                rec.bind_compute(&self.blur_layer, blur_set);
-                rec.push_constants(
-                    &self.blur_layer,
-                    bytemuck::cast_slice(&[
-                        *face,
-                        (layer.beta as f32).to_bits(),
-                        (LOBE_CUTOFF as f32).to_bits(),
-                    ]),
-                );
-                rec.dispatch(groups(*face), groups(*face), 6);
+            // Steps 3 and 4 are independent of each other.
+            for ((layer, _), set) in run.buffers.layers.iter().zip(&run.sets.blur) {
+                self.blur_layer(rec, set, layer);
                 mark(rec);
             }
-            rec.bind_compute(&self.irradiance, &irr_set);
-            rec.push_constants(&self.irradiance, bytemuck::bytes_of(&irr_face));
-            rec.dispatch(groups(irr_face), groups(irr_face), 6);
+            self.irradiance(rec, &run.sets.irradiance, run.buffers.irradiance_face);
             mark(rec);
             rec.memory_barrier(Access::ComputeShaderWrite, Access::TransferRead);
-            // 5. buffers → sampled cube images
-            copy_to_image(rec, &mips[0], &layers[0]);
-            for ((_, buf), image) in layer_buffers.iter().zip(&layers[1..]) {
-                copy_to_image(rec, buf, image);
-            }
-            copy_to_image(rec, &irradiance_buf, &irradiance);
+            run.copy_to_images(rec);
             mark(rec);
             Ok(())
         })?;
         let t = stamps.read_ns(stamps.capacity())?;
         let span = |a: usize, b: usize| (t[b] - t[a]).max(0.0) * 1e-9;
-        let blurred = layer_buffers.len();
+        let blurred = run.buffers.layers.len();
         let timings = PrefilterTimings {
             equirect_to_cube: span(0, 1),
             mip_chain: span(1, 2),
@@ -338,13 +218,69 @@ impl GpuPrefilter {
             irradiance: span(2 + blurred, 3 + blurred),
             copy_to_images: span(3 + blurred, 4 + blurred),
         };
-
         let env = GpuEnvironment {
-            betas: plan.iter().map(|l| l.beta).collect(),
-            layers,
-            irradiance,
+            betas: params.plan().iter().map(|l| l.beta).collect(),
+            layers: run.images,
+            irradiance: run.irradiance_image,
         };
         Ok((env, timings))
+    }
+
+    /// Step 1, twin of [`oracle::equirect_to_cube`](super::oracle::equirect_to_cube): the base
+    /// cube from the equirect (equirect_to_cube*.comp), with shaderFloat64 finished by the near
+    /// pass over the texels the first dispatch listed.
+    fn equirect_to_cube(
+        &self,
+        rec: &mut Recorder<'_>,
+        run: &PrefilterRun,
+        constants: &EquirectToCubeParams,
+    ) {
+        rec.bind_compute(&self.equirect_to_cube, &run.sets.to_cube);
+        rec.push_constants(&self.equirect_to_cube, bytemuck::bytes_of(constants));
+        let groups = groups(constants.face_size);
+        rec.dispatch(groups, groups, 6);
+        if let (Some(near), Some(near_set)) = (&self.equirect_near, &run.sets.near) {
+            // The list and its dispatch size, and the partial texels it rewrites.
+            rec.memory_barrier(Access::ComputeShaderWrite, Access::IndirectCommandRead);
+            rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
+            rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderWrite);
+            rec.bind_compute(near, near_set);
+            rec.push_constants(near, bytemuck::bytes_of(constants));
+            rec.dispatch_indirect(&run.buffers.near_texels, NEAR_DISPATCH_OFFSET);
+        }
+        rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
+    }
+
+    /// Step 2, twin of [`oracle::downsample`](super::oracle::downsample): one level of the mip
+    /// chain, face 2·`dst_face_size` → `dst_face_size` (downsample.comp).
+    fn downsample(&self, rec: &mut Recorder<'_>, set: &DescriptorSet, dst_face_size: u32) {
+        rec.bind_compute(&self.downsample, set);
+        let constants = DownsampleParams { dst_face_size };
+        rec.push_constants(&self.downsample, bytemuck::bytes_of(&constants));
+        rec.dispatch(groups(dst_face_size), groups(dst_face_size), 6);
+        rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
+    }
+
+    /// Step 3, twin of [`oracle::blur_layer`](super::oracle::blur_layer): one blurred layer from
+    /// the mip of its face size (prefilter_layers.comp).
+    fn blur_layer(&self, rec: &mut Recorder<'_>, set: &DescriptorSet, layer: &LayerPlan) {
+        rec.bind_compute(&self.blur_layer, set);
+        let constants = BlurLayerParams {
+            face_size: layer.face_size,
+            beta: layer.beta as f32,
+            cutoff: LOBE_CUTOFF as f32,
+        };
+        rec.push_constants(&self.blur_layer, bytemuck::bytes_of(&constants));
+        rec.dispatch(groups(layer.face_size), groups(layer.face_size), 6);
+    }
+
+    /// Step 4, twin of [`oracle::irradiance`](super::oracle::irradiance): the irradiance cube
+    /// from the mip of its face size (irradiance.comp).
+    fn irradiance(&self, rec: &mut Recorder<'_>, set: &DescriptorSet, face_size: u32) {
+        rec.bind_compute(&self.irradiance, set);
+        let constants = IrradianceParams { face_size };
+        rec.push_constants(&self.irradiance, bytemuck::bytes_of(&constants));
+        rec.dispatch(groups(face_size), groups(face_size), 6);
     }
 }
 
@@ -457,25 +393,20 @@ fn check_source(source: &Equirect, intensity: f64, rotation_deg: f64) -> Result<
 impl GpuEnvironment {
     /// Copies every layer and the irradiance back to the host (tests, `shikki prefilter`).
     pub fn read_back(&self, gpu: &GpuContext) -> Result<PrefilteredEnvironment> {
-        let sources: Vec<&Image> = self
+        let readback = |image: &Image| -> Result<Buffer> {
+            let bytes = cube_bytes(image.desc().width);
+            Ok(gpu.create_buffer(BufferDesc::readback("env readback", bytes))?)
+        };
+        let layers = self
             .layers
             .iter()
-            .chain(std::iter::once(&self.irradiance))
-            .collect();
-        let targets: Vec<(u32, Buffer)> = sources
-            .iter()
-            .map(|image| {
-                let face = image.desc().width;
-                Ok((
-                    face,
-                    gpu.create_buffer(BufferDesc::readback("env readback", cube_bytes(face)))?,
-                ))
-            })
-            .collect::<Result<_>>()?;
+            .map(|image| Ok((image, readback(image)?)))
+            .collect::<Result<Vec<_>>>()?;
+        let irradiance = (&self.irradiance, readback(&self.irradiance)?);
         let sampled = ImageUse::new(Access::GraphicsShaderRead, Layout::ShaderRead);
         let transfer_src = ImageUse::new(Access::TransferRead, Layout::TransferSrc);
         gpu.submit_and_wait(|rec| {
-            for (image, (_, dst)) in sources.iter().zip(&targets) {
+            for (image, dst) in layers.iter().chain(std::iter::once(&irradiance)) {
                 // Draws may have sampled the image; it goes back to being sampled after.
                 rec.image_barrier(image, sampled, transfer_src);
                 rec.copy_image_to_buffer(image, dst);
@@ -484,22 +415,16 @@ impl GpuEnvironment {
             rec.memory_barrier(Access::TransferWrite, Access::HostRead);
             Ok(())
         })?;
-        let mut cubes = targets
-            .iter()
-            .map(|(face, buf)| {
-                Ok(CubeImage {
-                    face_size: *face,
-                    texels: buf.read()?,
-                })
+        let cube = |(image, buffer): &(&Image, Buffer)| -> Result<CubeImage> {
+            Ok(CubeImage {
+                face_size: image.desc().width,
+                texels: buffer.read()?,
             })
-            .collect::<Result<Vec<_>>>()?;
-        let irradiance = cubes.pop().ok_or_else(|| {
-            Error::invalid("environment", "empty", "internal: no irradiance read back")
-        })?;
+        };
         Ok(PrefilteredEnvironment {
             betas: self.betas.clone(),
-            layers: cubes,
-            irradiance,
+            layers: layers.iter().map(cube).collect::<Result<_>>()?,
+            irradiance: cube(&irradiance)?,
         })
     }
 }

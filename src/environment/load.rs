@@ -1,7 +1,8 @@
 //! Loading an HDR environment into an [`Equirect`] of linear RGB (SPEC §4): Radiance `.hdr`
 //! (our own RGBE decoder), OpenEXR (the `exr` crate) and `builtin:studio`, the CC0 studio HDRI
 //! embedded in the binary. Owns decoding and the clean-up of non-finite or negative pixels; it
-//! does not know about cubes, the prefilter or the CLI (which prints the warning).
+//! does not know about cubes, the prefilter or who is told about replaced pixels (`prepare.rs`
+//! turns the count into a `Warning`).
 //!
 //! Every size is checked against [`MAX_SIDE`] and [`MAX_PIXELS`] before anything is allocated, so
 //! a hostile header cannot make us ask for gigabytes; a file larger than [`MAX_ENV_FILE_BYTES`]
@@ -34,7 +35,7 @@ pub const MAX_ENV_FILE_BYTES: u64 = 1 << 32;
 const MAX_HDR_HEADER: usize = 64 * 1024;
 
 /// An environment as loaded: the radiance, how many pixels had a non-finite or negative component
-/// (those components are now 0; the CLI prints one warning), and where it came from.
+/// (those components are now 0; preparation returns one warning), and where it came from.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LoadedEnvironment {
     pub image: Equirect,

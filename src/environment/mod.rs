@@ -9,7 +9,9 @@
 //!  3. layer k: brute-force lobe convolution w = exp((c−1)/β_k²) of the mip of the layer's size
 //!  4. irradiance: cosine convolution of the 32² mip
 //! ```
-//! `definition.rs` is SPEC §4's integral evaluated at full source resolution, for tests only.
+//! `prepare.rs` is the one way a renderer gets its environment: load → device-clamped parameters
+//! → disk cache (`disk_cache.rs`) → GPU prefilter. `definition.rs` is SPEC §4's integral
+//! evaluated at full source resolution, for tests only.
 
 pub mod cube;
 pub mod definition;
@@ -19,9 +21,11 @@ pub mod image;
 pub mod load;
 pub mod oracle;
 pub mod params;
+pub mod prepare;
 pub mod preview;
 
 pub use image::{CubeImage, Equirect, PrefilteredEnvironment};
 pub use load::{load_environment, LoadedEnvironment};
 pub use oracle::prefilter_cpu;
-pub use params::{LayerPlan, PrefilterParams};
+pub use params::{EnvironmentLight, LayerPlan, PrefilterParams};
+pub use prepare::{EnvironmentPreparer, EnvironmentSource};

@@ -1,6 +1,8 @@
 //! The CPU oracle of the prefilter: exactly the algorithm `gpu.rs` runs, step by step, in plain
-//! f64 Rust, so that every GPU texel can be checked against it (1e-3 relative). Owns nothing but
-//! these steps; the geometry is `cube.rs`'s, the plan (β_k, face sizes, cut-off) `params.rs`'s.
+//! f64 Rust, so that every GPU texel can be checked against it (1e-3 relative). Each step has the
+//! name of its GPU twin (`GpuPrefilter::equirect_to_cube`, `downsample`, `blur_layer`,
+//! `irradiance`). Owns nothing but these steps; the geometry is `cube.rs`'s, the plan (β_k, face
+//! sizes, cut-off) `params.rs`'s.
 //!
 //! ```text
 //! equirect ──equirect_to_cube──► base (face N) ──downsample──► mips N/2 … ──┬─ blur_layer(β_k) ─► layer k
@@ -91,11 +93,12 @@ fn validate_source(source: &Equirect) -> Result<()> {
 
 /// Step 1: texel (f, i, j) is the mean of S × S sub-samples
 /// (S = [`equirect_supersample`](super::params::equirect_supersample), shared with the GPU's
-/// `shaders/common/equirect_to_cube_body.glsl` through a push constant) at face coordinates sc = 2(i + (a + ½)/S)/N − 1, tc = 2(j + (b + ½)/S)/N − 1; each looks along
+/// `shaders/common/equirect_to_cube_body.glsl` through a push constant) at face coordinates
+/// sc = 2(i + (a + ½)/S)/N − 1, tc = 2(j + (b + ½)/S)/N − 1; each looks along
 /// normalize(face_direction(f, sc, tc)), turned into the environment's frame, and reads the source
 /// pixel that contains its (u, v): column ⌊u·W⌋ wrapping around, row ⌊v·H⌋ clamped at the poles.
 /// Times `intensity`. A box filter over the texel, so that a source finer than the cube is
-/// averaged rather than point-sampled.
+/// averaged rather than point-sampled. GPU twin: `GpuPrefilter::equirect_to_cube`.
 pub fn equirect_to_cube(
     source: &Equirect,
     face_size: u32,
@@ -140,6 +143,7 @@ pub fn source_pixel(source: &Equirect, d: DVec3) -> [f64; 3] {
 
 /// Step 2: each parent texel is the solid-angle-weighted mean of its 2×2 children, so a mip keeps
 /// the radiance integral ∫L dω of the cube it came from (up to the texel solid-angle formula).
+/// GPU twin: `GpuPrefilter::downsample`.
 pub fn downsample(cube: &CubeImage) -> CubeImage {
     let child_size = cube.face_size;
     let mut parent = CubeImage::new(child_size / 2);
@@ -183,6 +187,7 @@ pub fn mip_chain(base: &CubeImage, params: &PrefilterParams) -> Vec<CubeImage> {
 /// Step 3: Lpre(d, β) = Σ w·L_s / Σ w, w = exp(−q/β²)·dω_s, q = |d − s|²/2 = 1 − d·s, over the
 /// texels s of `source` with q ≤ LOBE_CUTOFF·β². The sum runs over a conservative window per face
 /// (see [`face_window`]) and equals the sum over every texel (tested); output face = source face.
+/// GPU twin: `GpuPrefilter::blur_layer`.
 pub fn blur_layer(source: &CubeImage, beta: f64) -> CubeImage {
     let m = source.face_size;
     let texels = SourceTexels::new(source);
@@ -219,7 +224,7 @@ pub fn blur_layer(source: &CubeImage, beta: f64) -> CubeImage {
 
 /// Step 4: E(n) = π·Σ L_s·max(n·s, 0)·dω_s / Σ max(n·s, 0)·dω_s over every texel of `source`. The
 /// quadrature's own Σ max(n·s, 0)·dω_s stands in for ∫ max(n·s, 0) dω = π, so a constant c gives
-/// exactly π·c; output face = source face.
+/// exactly π·c; output face = source face. GPU twin: `GpuPrefilter::irradiance`.
 pub fn irradiance(source: &CubeImage) -> CubeImage {
     let m = source.face_size;
     let texels = SourceTexels::new(source);

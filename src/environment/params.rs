@@ -39,7 +39,7 @@ const _: () = assert!(6 * IRRADIANCE_FACE * IRRADIANCE_FACE < 65535);
 
 /// Limits on what a user may ask for.
 pub const MAX_FACE_SIZE: u32 = 4096;
-pub const MAX_LAYERS: u32 = 16;
+pub use crate::gpu::shaders::interface::MAX_ENV_LAYERS;
 
 /// What the user chooses (`shikki prefilter --face-size --layers --beta-min --beta-max`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,11 +74,11 @@ impl PrefilterParams {
                 ),
             ));
         }
-        if !(2..=MAX_LAYERS).contains(&self.layers) {
+        if !(2..=MAX_ENV_LAYERS as u32).contains(&self.layers) {
             return Err(Error::invalid(
                 "layers",
                 self.layers,
-                format!("K must be in 2..={MAX_LAYERS} (layer 0 is the sharp map)"),
+                format!("K must be in 2..={MAX_ENV_LAYERS} (layer 0 is the sharp map)"),
             ));
         }
         for (field, value) in [("beta_min", self.beta_min), ("beta_max", self.beta_max)] {
@@ -148,6 +148,34 @@ impl PrefilterParams {
     /// Face size of the irradiance cube.
     pub fn irradiance_face(&self) -> u32 {
         IRRADIANCE_FACE.min(self.face_size)
+    }
+}
+
+/// How an environment map lights the world (SPEC §4): its radiance × `intensity`, turned by
+/// `rotation_deg` about +Y. Applied when the map is resampled to the cube, so both are part of a
+/// prefiltered environment's identity (its cache key) although they change none of the plan.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EnvironmentLight {
+    pub intensity: f64,
+    pub rotation_deg: f64,
+}
+
+impl Default for EnvironmentLight {
+    /// The map as stored, unrotated.
+    fn default() -> Self {
+        Self {
+            intensity: 1.0,
+            rotation_deg: 0.0,
+        }
+    }
+}
+
+impl EnvironmentLight {
+    /// Bit-exact equality: two lights that prefilter to different bytes (0° and −0° included)
+    /// are never taken for one another by a cache.
+    pub fn same_bits(&self, other: &Self) -> bool {
+        self.intensity.to_bits() == other.intensity.to_bits()
+            && self.rotation_deg.to_bits() == other.rotation_deg.to_bits()
     }
 }
 

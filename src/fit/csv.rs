@@ -10,8 +10,8 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use super::data::{light_direction, view_direction, Measurement, Measurements, Sample};
-use crate::model::material_file::read_text_file;
 use crate::model::spectral::reflectance_to_rgb;
+use crate::text::read_text_file;
 use crate::{Error, Result};
 
 /// The geometry columns, in the order they are written.

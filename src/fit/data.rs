@@ -1,7 +1,7 @@
 //! Measurements as the fit sees them: boards (samples) with their lacquer ratio, and rows of
 //! (light, view, RGB reflectance factor) in the board's frame, N = +Z.
 //!
-//! Owns the goniometer angle convention (the issue's): θ_i is the light's angle from the normal,
+//! Owns the goniometer angle convention (docs/measurements.md): θ_i is the light's angle from the normal,
 //! θ_o the viewer's, φ the viewer's azimuth from the plane of incidence, and φ = 0 with θ_o = θ_i
 //! is the mirror direction. So the light lies at azimuth 180°: L = (−sin θ_i, 0, cos θ_i) and
 //! V = (sin θ_o cos φ, sin θ_o sin φ, cos θ_o); a negative θ_o at φ = 0 is on the light's side.
@@ -101,7 +101,7 @@ mod tests {
 
     #[test]
     fn mirror_direction_is_theta_o_equal_theta_i_at_phi_zero() {
-        // The convention of the issue: L and V = reflect(L) about N are at θ_o = θ_i, φ = 0.
+        // The convention of docs/measurements.md: L and V = reflect(L) about N are at θ_o = θ_i, φ = 0.
         for theta in [0.0, 10.0, 45.0, 80.0] {
             let l = light_direction(theta);
             let v = view_direction(theta, 0.0);

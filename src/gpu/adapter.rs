@@ -1,6 +1,9 @@
 //! Choosing the physical device: discrete > integrated > virtual > CPU, or the first whose name
 //! contains `SHIKKI_DEVICE`. Only devices with Vulkan 1.3, dynamic rendering, synchronization2 and
 //! a graphics+compute queue qualify.
+//!
+//! This is also the one place that knows drivers apart: [`Quirks`], set here once from the chosen
+//! device's driver ID and version, records what each driver does that the renderer works around.
 
 use super::error::{GpuError, VkResultExt};
 use ash::vk;
@@ -29,6 +32,119 @@ pub struct AdapterInfo {
     pub pipeline_cache_id: (u32, u32, [u8; 16]),
     /// Rays traced from shaders: available and enabled, turned off, or what the device lacks.
     pub ray_query: RayQuery,
+    /// What this driver does that the renderer works around.
+    pub quirks: Quirks,
+}
+
+/// Driver behaviour the renderer works around, one field per quirk, set once when the adapter is
+/// chosen (`Quirks::of_driver`). Code and shaders name a quirk by its field (`// quirk
+/// ssbo_gather_is_per_lane`) instead of retelling it; `shikki info` lists the active ones.
+///
+/// Most workarounds are unconditional (the shaders read gathers from texel buffers on every
+/// driver): they cost nothing measurable elsewhere, and one set of shaders keeps every driver on
+/// the same code and the same bits. The field then records which drivers need it.
+/// Supported drivers: lavapipe from Mesa 22.3 (Debian 12's own; no ray queries) and from Mesa ≥
+/// 24.1 (the reference device, with ray queries), and GPU drivers. The quirks that cost speed were
+/// re-measured on Mesa 25.0 and still pay (BENCHMARKS.md, "Mesa 25").
+///
+/// To add one: a field saying which drivers and why, its condition in `Quirks::of_driver`, and
+/// its name in [`Quirks::NAMES`] and [`Quirks::active`] (same order).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Quirks {
+    /// lavapipe, every version: a loop is cut off after [`Quirks::LOOP_ITERATION_LIMIT`]
+    /// iterations per invocation (gallivm's loop limiter), silently. Compute shaders keep every
+    /// loop's trip count below it: the prefilter visits only the cube faces a lobe can reach, and
+    /// `environment/params.rs` bounds the irradiance source at 6·32² texels. Seen on Mesa 22.3;
+    /// not probed on 25, as the bound costs nothing.
+    pub loop_iteration_limit: bool,
+    /// Every driver: GLSL `acos`/`atan` have no useful precision bound in Vulkan (atan's is 4096
+    /// ulp), and lavapipe's acos is off by ~1e-4 rad, beyond what the oracle tests allow. Shaders
+    /// use `common/math.glsl` instead.
+    pub imprecise_inverse_trig: bool,
+    /// lavapipe, every version: an SSBO element is loaded lane by lane unless the address is
+    /// provably uniform (a loop counter is not), while a `texelFetch` gathers a whole texel per
+    /// lane. Gathered reads use texel buffers (`BindingKind::UniformTexelBuffer`), declared
+    /// `textureBuffer` (`common/texel_buffer.glsl`; Mesa 25's SPIR-V parser rejects a
+    /// `samplerBuffer`).
+    pub ssbo_gather_is_per_lane: bool,
+    /// lavapipe, every version: a loop's body runs once, masked, even when no lane enters it, and
+    /// both sides of every `if` run under a lane mask. Rare expensive work goes to a separate
+    /// dispatch over a compacted list (the prefilter's near-edge pass), not behind a condition.
+    pub loop_body_runs_when_no_lane_enters: bool,
+    /// lavapipe before Mesa 25 (seen on 22.3; 25.0 writes them in place; the versions between
+    /// were not measured): after a graphics pass, a timestamp is written at the rasterizer's next
+    /// flush, not where it was recorded, so later compute-only timestamps land one pass late. Only
+    /// per-pass splits are affected (the wall clock is right): `shikki bench` marks them.
+    pub late_timestamps_after_graphics: bool,
+}
+
+impl Quirks {
+    /// The iterations lavapipe runs of one loop in one invocation (`loop_iteration_limit`).
+    pub const LOOP_ITERATION_LIMIT: u32 = 65535;
+
+    /// Every quirk's name, as its field is spelled, in declaration order.
+    pub const NAMES: [&'static str; 5] = [
+        "loop_iteration_limit",
+        "imprecise_inverse_trig",
+        "ssbo_gather_is_per_lane",
+        "loop_body_runs_when_no_lane_enters",
+        "late_timestamps_after_graphics",
+    ];
+
+    /// The quirks of a driver: its Vulkan driver ID and `driverInfo` text (Mesa's reads
+    /// "Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)").
+    pub(crate) fn of_driver(driver_id: vk::DriverId, driver_info: &str) -> Quirks {
+        let lavapipe = driver_id == vk::DriverId::MESA_LLVMPIPE;
+        let mesa = mesa_version(driver_info);
+        Quirks {
+            loop_iteration_limit: lavapipe,
+            imprecise_inverse_trig: true,
+            ssbo_gather_is_per_lane: lavapipe,
+            loop_body_runs_when_no_lane_enters: lavapipe,
+            // An unreadable version counts as old: a wrong "unreliable" costs less than a wrong
+            // split.
+            late_timestamps_after_graphics: lavapipe && !matches!(mesa, Some(v) if v >= (25, 0)),
+        }
+    }
+
+    /// The names of the quirks that are set, in [`Quirks::NAMES`] order.
+    pub fn active(&self) -> Vec<&'static str> {
+        let set = [
+            self.loop_iteration_limit,
+            self.imprecise_inverse_trig,
+            self.ssbo_gather_is_per_lane,
+            self.loop_body_runs_when_no_lane_enters,
+            self.late_timestamps_after_graphics,
+        ];
+        Self::NAMES
+            .iter()
+            .zip(set)
+            .filter(|(_, on)| *on)
+            .map(|(name, _)| *name)
+            .collect()
+    }
+
+    /// One line for `shikki info`: the active quirks' names, or "none".
+    pub fn summary(&self) -> String {
+        let active = self.active();
+        if active.is_empty() {
+            "none".into()
+        } else {
+            active.join(", ")
+        }
+    }
+}
+
+/// (major, minor) from a Mesa driver's `driverInfo` ("Mesa 22.3.6 (LLVM 15.0.6)").
+fn mesa_version(driver_info: &str) -> Option<(u32, u32)> {
+    let rest = driver_info.split("Mesa ").nth(1)?;
+    let mut numbers = rest
+        .split(|c: char| !c.is_ascii_digit())
+        .map(str::parse::<u32>);
+    match (numbers.next(), numbers.next()) {
+        (Some(Ok(major)), Some(Ok(minor))) => Some((major, minor)),
+        _ => None,
+    }
 }
 
 /// Ray queries from shaders (`VK_KHR_ray_query` over `VK_KHR_acceleration_structure`), which
@@ -242,6 +358,7 @@ fn describe(
         None => RayQuery::Disabled,
         Some(what) => RayQuery::Missing(what),
     };
+    let quirks = Quirks::of_driver(driver.driver_id, &driver_info);
     Ok(AdapterInfo {
         name,
         device_type: super::conv::device_type_name(props.device_type).to_string(),
@@ -271,5 +388,38 @@ fn describe(
             features.shader_float64 == vk::TRUE
         },
         ray_query,
+        quirks,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MESA_22: &str = "Mesa 22.3.6 (LLVM 15.0.6)";
+    const MESA_25: &str = "Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)";
+
+    #[test]
+    fn mesa_versions_are_read_from_driver_info() {
+        assert_eq!(mesa_version(MESA_22), Some((22, 3)));
+        assert_eq!(mesa_version(MESA_25), Some((25, 0)));
+        assert_eq!(mesa_version("570.86.16"), None);
+        assert_eq!(mesa_version("Mesa x"), None);
+    }
+
+    #[test]
+    fn lavapipe_has_every_quirk_and_late_timestamps_only_before_mesa_25() {
+        let old = Quirks::of_driver(vk::DriverId::MESA_LLVMPIPE, MESA_22);
+        assert_eq!(old.active(), Quirks::NAMES);
+        let new = Quirks::of_driver(vk::DriverId::MESA_LLVMPIPE, MESA_25);
+        assert!(!new.late_timestamps_after_graphics);
+        assert_eq!(new.active(), Quirks::NAMES[..4]);
+    }
+
+    #[test]
+    fn other_drivers_keep_only_the_inverse_trig_quirk() {
+        let gpu = Quirks::of_driver(vk::DriverId::NVIDIA_PROPRIETARY, "570.86.16");
+        assert_eq!(gpu.summary(), "imprecise_inverse_trig");
+        assert_eq!(Quirks::default().summary(), "none");
+    }
 }

@@ -53,7 +53,8 @@ impl Recorder<'_> {
         };
     }
 
-    /// Writes timestamp `index` once all previously recorded work has completed.
+    /// Writes timestamp `index` once all previously recorded work has completed (later than that
+    /// after a graphics pass where the driver has quirk `late_timestamps_after_graphics`).
     pub fn timestamp(&mut self, pool: &TimestampPool, index: u32) {
         if index >= pool.capacity() {
             return;

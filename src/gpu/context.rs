@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 /// How long a submit may take before shikki reports a hung driver instead of waiting forever.
-/// lavapipe renders a 4096² MSAA image in seconds; ten minutes is far beyond any real job.
+/// A CPU driver renders a 4096² MSAA image in seconds; ten minutes is far beyond any real job.
 const SUBMIT_TIMEOUT_SECONDS: u64 = 600;
 
 /// Options for creating the context.
@@ -165,6 +165,11 @@ impl GpuContext {
 
     pub fn info(&self) -> &AdapterInfo {
         &self.shared.info
+    }
+
+    /// The chosen driver's quirks (as in [`AdapterInfo::quirks`]).
+    pub fn quirks(&self) -> super::adapter::Quirks {
+        self.shared.info.quirks
     }
 
     /// The pipeline cache file from the options, if any: other on-disk caches (prefiltered

@@ -18,8 +18,7 @@ pub enum BindingKind {
     StorageBuffer,
     SampledImage,
     StorageImage,
-    /// A `textureBuffer` of RGBA32F texels: on llvmpipe a `texelFetch` gathers a whole texel per
-    /// lane, where an SSBO load runs a scalar loop over the lanes for every component.
+    /// A `textureBuffer` of RGBA32F texels, for gathered reads (quirk `ssbo_gather_is_per_lane`).
     UniformTexelBuffer,
 }
 
@@ -301,22 +300,7 @@ impl GraphicsPipeline {
             .binding(0)
             .stride(desc.vertex_stride)
             .input_rate(vk::VertexInputRate::VERTEX);
-        let attributes: Vec<vk::VertexInputAttributeDescription> = desc
-            .vertex_attributes
-            .iter()
-            .map(|a| {
-                vk::VertexInputAttributeDescription::default()
-                    .location(a.location)
-                    .binding(0)
-                    .format(match a.components {
-                        1 => vk::Format::R32_SFLOAT,
-                        2 => vk::Format::R32G32_SFLOAT,
-                        3 => vk::Format::R32G32B32_SFLOAT,
-                        _ => vk::Format::R32G32B32A32_SFLOAT,
-                    })
-                    .offset(a.offset)
-            })
-            .collect();
+        let attributes: Vec<_> = desc.vertex_attributes.iter().map(attribute).collect();
         // No attributes: a pass that makes its vertices from gl_VertexIndex.
         let vertex_input = if attributes.is_empty() {
             vk::PipelineVertexInputStateCreateInfo::default()
@@ -327,37 +311,14 @@ impl GraphicsPipeline {
         };
         let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
             .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-        let viewport = vk::PipelineViewportStateCreateInfo::default()
-            .viewport_count(1)
-            .scissor_count(1);
-        let raster = vk::PipelineRasterizationStateCreateInfo::default()
-            .polygon_mode(vk::PolygonMode::FILL)
-            .cull_mode(vk::CullModeFlags::NONE)
-            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-            .line_width(1.0);
+        let (viewport, raster) = (viewport_state(), raster_state());
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(conv::sample_count_flag(desc.samples));
-        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(desc.depth_test.is_some())
-            .depth_write_enable(desc.depth_test.is_some_and(|t| t.write))
-            .depth_compare_op(
-                desc.depth_test
-                    .map_or(vk::CompareOp::ALWAYS, |t| conv::compare_op(t.compare)),
-            );
-        let blend_attachments = vec![
-            vk::PipelineColorBlendAttachmentState::default()
-                .blend_enable(false)
-                .color_write_mask(if desc.color_writes {
-                    vk::ColorComponentFlags::RGBA
-                } else {
-                    vk::ColorComponentFlags::empty()
-                });
-            desc.color_formats.len()
-        ];
+        let depth = depth_state(desc.depth_test);
+        let blend_attachments = vec![blend_attachment(desc.color_writes); desc.color_formats.len()];
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&DYNAMIC_STATES);
         let color_formats: Vec<vk::Format> = desc
             .color_formats
             .iter()
@@ -406,6 +367,57 @@ impl Drop for GraphicsPipeline {
         // SAFETY: no pending work uses the pipeline.
         unsafe { self.layout.shared.device.destroy_pipeline(self.raw, None) };
     }
+}
+
+/// The viewport and scissor are set when recording.
+const DYNAMIC_STATES: [vk::DynamicState; 2] =
+    [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+
+fn viewport_state() -> vk::PipelineViewportStateCreateInfo<'static> {
+    vk::PipelineViewportStateCreateInfo::default()
+        .viewport_count(1)
+        .scissor_count(1)
+}
+
+/// Filled triangles, both faces (the BRDF is zero for back faces: nv <= 0).
+fn raster_state() -> vk::PipelineRasterizationStateCreateInfo<'static> {
+    vk::PipelineRasterizationStateCreateInfo::default()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(vk::CullModeFlags::NONE)
+        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+        .line_width(1.0)
+}
+
+/// Vertex attribute `a` of binding 0, f32 components.
+fn attribute(a: &VertexAttribute) -> vk::VertexInputAttributeDescription {
+    vk::VertexInputAttributeDescription::default()
+        .location(a.location)
+        .binding(0)
+        .format(match a.components {
+            1 => vk::Format::R32_SFLOAT,
+            2 => vk::Format::R32G32_SFLOAT,
+            3 => vk::Format::R32G32B32_SFLOAT,
+            _ => vk::Format::R32G32B32A32_SFLOAT,
+        })
+        .offset(a.offset)
+}
+
+fn depth_state(test: Option<DepthTest>) -> vk::PipelineDepthStencilStateCreateInfo<'static> {
+    vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(test.is_some())
+        .depth_write_enable(test.is_some_and(|t| t.write))
+        .depth_compare_op(test.map_or(vk::CompareOp::ALWAYS, |t| conv::compare_op(t.compare)))
+}
+
+/// No blending; `writes` false keeps the attachment's values (a depth-only draw).
+fn blend_attachment(writes: bool) -> vk::PipelineColorBlendAttachmentState {
+    vk::PipelineColorBlendAttachmentState::default()
+        .blend_enable(false)
+        .color_write_mask(if writes {
+            vk::ColorComponentFlags::RGBA
+        } else {
+            vk::ColorComponentFlags::empty()
+        })
 }
 
 /// What a binding points at.
@@ -492,9 +504,16 @@ impl DescriptorSet {
         layout: &PipelineLayout,
         resources: &[(u32, Resource<'_>)],
     ) -> Result<(), GpuError> {
-        let mut buffer_infos = Vec::new();
-        let mut texel_views = Vec::new();
-        let mut image_infos: Vec<(u32, Vec<vk::DescriptorImageInfo>)> = Vec::new();
+        let infos = self.infos(resources)?;
+        let writes = self.writes(layout, &infos)?;
+        // SAFETY: the set is not in use by any pending command buffer; infos outlive the call.
+        unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
+        Ok(())
+    }
+
+    /// Each resource as Vulkan describes it, by binding index (texel buffers get their views).
+    fn infos(&mut self, resources: &[(u32, Resource<'_>)]) -> Result<DescriptorInfos, GpuError> {
+        let mut infos = DescriptorInfos::default();
         let sampled = |image: &Image, sampler: &Sampler| vk::DescriptorImageInfo {
             sampler: sampler.raw,
             image_view: image.view,
@@ -502,7 +521,7 @@ impl DescriptorSet {
         };
         for (index, resource) in resources {
             match resource {
-                Resource::Buffer(b) => buffer_infos.push((
+                Resource::Buffer(b) => infos.buffers.push((
                     *index,
                     vk::DescriptorBufferInfo {
                         buffer: b.raw,
@@ -511,13 +530,13 @@ impl DescriptorSet {
                     },
                 )),
                 Resource::SampledImage(image, sampler) => {
-                    image_infos.push((*index, vec![sampled(image, sampler)]))
+                    infos.images.push((*index, vec![sampled(image, sampler)]))
                 }
-                Resource::SampledImages(images, sampler) => image_infos.push((
+                Resource::SampledImages(images, sampler) => infos.images.push((
                     *index,
                     images.iter().map(|image| sampled(image, sampler)).collect(),
                 )),
-                Resource::StorageImage(image) => image_infos.push((
+                Resource::StorageImage(image) => infos.images.push((
                     *index,
                     vec![vk::DescriptorImageInfo {
                         sampler: vk::Sampler::null(),
@@ -525,9 +544,18 @@ impl DescriptorSet {
                         image_layout: vk::ImageLayout::GENERAL,
                     }],
                 )),
-                Resource::TexelBuffer(b) => texel_views.push((*index, self.texel_view(b)?)),
+                Resource::TexelBuffer(b) => infos.texel_views.push((*index, self.texel_view(b)?)),
             }
         }
+        Ok(infos)
+    }
+
+    /// One write per binding of `infos`, checked against `layout`.
+    fn writes<'i>(
+        &self,
+        layout: &PipelineLayout,
+        infos: &'i DescriptorInfos,
+    ) -> Result<Vec<vk::WriteDescriptorSet<'i>>, GpuError> {
         let binding_of = |index: u32| -> Result<Binding, GpuError> {
             layout
                 .bindings
@@ -540,46 +568,41 @@ impl DescriptorSet {
                     limit: layout.bindings.len() as u64,
                 })
         };
+        let write = |index: u32, binding: Binding| {
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.raw)
+                .dst_binding(index)
+                .descriptor_type(descriptor_type(binding.kind))
+        };
         let mut writes = Vec::new();
-        for (index, info) in &buffer_infos {
-            writes.push(
-                vk::WriteDescriptorSet::default()
-                    .dst_set(self.raw)
-                    .dst_binding(*index)
-                    .descriptor_type(descriptor_type(binding_of(*index)?.kind))
-                    .buffer_info(std::slice::from_ref(info)),
-            );
+        for (index, info) in &infos.buffers {
+            writes.push(write(*index, binding_of(*index)?).buffer_info(std::slice::from_ref(info)));
         }
-        for (index, view) in &texel_views {
-            writes.push(
-                vk::WriteDescriptorSet::default()
-                    .dst_set(self.raw)
-                    .dst_binding(*index)
-                    .descriptor_type(descriptor_type(binding_of(*index)?.kind))
-                    .texel_buffer_view(std::slice::from_ref(view)),
-            );
-        }
-        for (index, infos) in &image_infos {
+        for (index, view) in &infos.texel_views {
             let binding = binding_of(*index)?;
-            if infos.len() != binding.count as usize {
+            writes.push(write(*index, binding).texel_buffer_view(std::slice::from_ref(view)));
+        }
+        for (index, images) in &infos.images {
+            let binding = binding_of(*index)?;
+            if images.len() != binding.count as usize {
                 return Err(GpuError::Limit {
                     what: "descriptors for an array binding (must equal its count)",
-                    value: infos.len() as u64,
+                    value: images.len() as u64,
                     limit: u64::from(binding.count),
                 });
             }
-            writes.push(
-                vk::WriteDescriptorSet::default()
-                    .dst_set(self.raw)
-                    .dst_binding(*index)
-                    .descriptor_type(descriptor_type(binding.kind))
-                    .image_info(infos),
-            );
+            writes.push(write(*index, binding).image_info(images));
         }
-        // SAFETY: the set is not in use by any pending command buffer; infos outlive the call.
-        unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
-        Ok(())
+        Ok(writes)
     }
+}
+
+/// The descriptors of one [`DescriptorSet::write`], by binding index.
+#[derive(Default)]
+struct DescriptorInfos {
+    buffers: Vec<(u32, vk::DescriptorBufferInfo)>,
+    texel_views: Vec<(u32, vk::BufferView)>,
+    images: Vec<(u32, Vec<vk::DescriptorImageInfo>)>,
 }
 
 impl Drop for DescriptorSet {

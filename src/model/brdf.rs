@@ -15,8 +15,9 @@
 //!   nv + nl > 0), but the guard stays so that degenerate input gives 0, never NaN.
 //! - The Fresnel angle is θ = acos(clamp(vh, 0, 1)) in degrees. acos is ill-conditioned at vh → 1
 //!   (fp32 error ≈ 0.02° there), but F is flat near normal incidence, so F(θ) is not. Where F is
-//!   steep (towards grazing) the accuracy of the shader's acos itself matters: a library acos
-//!   off by 1e-4 rad costs 3e-4 relative in the dielectric F at 60° and 5e-4 at 80°.
+//!   steep (towards grazing) the accuracy of the shader's acos itself matters: an acos off by
+//!   1e-4 rad costs 3e-4 relative in the dielectric F at 60° and 5e-4 at 80° (quirk
+//!   `imprecise_inverse_trig`: the shaders use `common/math.glsl`'s).
 //! - Where exp(-tan²α/m²) underflows (far from the lobe, below 1e-38 in fp32) D is 0; compare
 //!   GPU and CPU with an absolute floor there, not a relative tolerance.
 

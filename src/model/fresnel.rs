@@ -46,8 +46,7 @@ impl FresnelTable {
     /// Reads a CSV file and parses it with [`FresnelTable::from_csv_str`]; errors name the file.
     /// Files above [`MAX_FRESNEL_CSV_BYTES`] are refused before reading.
     pub fn from_csv_file(path: &Path) -> Result<Self> {
-        let text =
-            super::material_file::read_text_file(path, MAX_FRESNEL_CSV_BYTES, "Fresnel CSV")?;
+        let text = crate::text::read_text_file(path, MAX_FRESNEL_CSV_BYTES, "Fresnel CSV")?;
         Self::from_csv_str(&text, &path.display().to_string())
     }
 

@@ -9,6 +9,8 @@ use std::path::PathBuf;
 
 use super::brdf::BrdfParams;
 use super::fresnel::{check_ior, FresnelTable, DEFAULT_IOR_A, DEFAULT_IOR_B};
+use crate::text::nearest;
+// Only for the scene loader's imports until they name `crate::text`.
 use crate::{Error, Result};
 
 /// One lacquer material. Field names follow the paper; the text keys of [`LacquerMaterial::set`]
@@ -55,6 +57,20 @@ pub const MATERIAL_KEYS: &[&str] = &[
     "m", "a", "b", "c0", "c1", "c2", "r", "kd", "extrapolate_g", "ior_a", "ior_b", "fresnel",
     "beta_normal", "beta_grazing", "beta_power",
 ];
+
+/// A field's value as typed data, for [`LacquerMaterial::set_value`]; [`LacquerMaterial::set`]
+/// parses the CLI's `KEY=VALUE` text into one.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MaterialValue {
+    /// m, a, b, c0, c1, c2, r, ior_a, ior_b, beta_normal, beta_grazing, beta_power.
+    Number(f64),
+    /// kd.
+    Rgb([f64; 3]),
+    /// extrapolate_g.
+    Bool(bool),
+    /// fresnel: a CSV path, or `None` for the dielectric table.
+    Path(Option<PathBuf>),
+}
 
 /// g(r) coefficients fitted by the paper, shared by both finishes (SPEC §2).
 const PAPER_LACQUER_LAW: [f64; 3] = [1.22, -0.224, 0.0199];
@@ -138,46 +154,74 @@ impl LacquerMaterial {
     /// (r within [1, r*] of the current c, g(r) ≥ 0) are left to [`LacquerMaterial::validate`],
     /// so that keys may be set in any order.
     pub fn set(&mut self, key: &str, value: &str) -> Result<()> {
-        let number = || parse_number(key, value);
-        match key {
-            "m" => self.beckmann_m = checked_beckmann_m(number()?)?,
-            "a" => self.diffuse_a = number()?,
-            "b" => self.diffuse_b = number()?,
-            "c0" => self.lacquer_law[0] = number()?,
-            "c1" => self.lacquer_law[1] = number()?,
-            "c2" => self.lacquer_law[2] = number()?,
-            "r" => self.lacquer_ratio = number()?,
-            "kd" => self.albedo = checked_albedo(parse_albedo(value)?)?,
-            "extrapolate_g" => {
-                self.extrapolate_g = match value.trim() {
-                    "true" | "1" => true,
-                    "false" | "0" => false,
-                    _ => return Err(Error::invalid(key, value, "must be `true` or `false`")),
-                }
+        let typed = match key {
+            "kd" => MaterialValue::Rgb(parse_albedo(value)?),
+            "extrapolate_g" => MaterialValue::Bool(match value.trim() {
+                "true" | "1" => true,
+                "false" | "0" => false,
+                _ => return Err(Error::invalid(key, value, "must be `true` or `false`")),
+            }),
+            "fresnel" => {
+                let path = value.trim();
+                MaterialValue::Path((!path.is_empty()).then(|| PathBuf::from(path)))
             }
-            "ior_a" => {
-                let ior_a = number()?;
+            _ if MATERIAL_KEYS.contains(&key) => MaterialValue::Number(parse_number(key, value)?),
+            _ => return Err(unknown_key(key)),
+        };
+        self.set_value(key, typed)
+    }
+
+    /// [`set`](Self::set) for a value that is already typed (a scene file's TOML number, array
+    /// or boolean; a C caller's double), so that a number is never printed and parsed again.
+    /// The same checks, the same messages.
+    pub fn set_value(&mut self, key: &str, value: MaterialValue) -> Result<()> {
+        use MaterialValue::{Bool, Number, Path, Rgb};
+        if !MATERIAL_KEYS.contains(&key) {
+            return Err(unknown_key(key));
+        }
+        let value = match value {
+            Number(x) => Number(finite_number(key, x)?),
+            Rgb(kd) => Rgb([
+                finite_number("kd", kd[0])?,
+                finite_number("kd", kd[1])?,
+                finite_number("kd", kd[2])?,
+            ]),
+            other => other,
+        };
+        match (key, value) {
+            ("m", Number(x)) => self.beckmann_m = checked_beckmann_m(x)?,
+            ("a", Number(x)) => self.diffuse_a = x,
+            ("b", Number(x)) => self.diffuse_b = x,
+            ("c0", Number(x)) => self.lacquer_law[0] = x,
+            ("c1", Number(x)) => self.lacquer_law[1] = x,
+            ("c2", Number(x)) => self.lacquer_law[2] = x,
+            ("r", Number(x)) => self.lacquer_ratio = x,
+            ("kd", Rgb(kd)) => self.albedo = checked_albedo(kd)?,
+            ("extrapolate_g", Bool(b)) => self.extrapolate_g = b,
+            ("ior_a", Number(ior_a)) => {
                 check_ior(ior_a, self.ior_b.max(0.0))?;
                 self.ior_a = ior_a;
             }
-            "ior_b" => {
-                let ior_b = number()?;
+            ("ior_b", Number(ior_b)) => {
                 check_ior(self.ior_a.max(1.0), ior_b)?;
                 self.ior_b = ior_b;
             }
-            "fresnel" => {
-                let path = value.trim();
-                self.fresnel_file = (!path.is_empty()).then(|| PathBuf::from(path));
-            }
-            "beta_normal" => self.beta_normal = checked_positive(key, number()?)?,
-            "beta_grazing" => self.beta_grazing = checked_positive(key, number()?)?,
-            "beta_power" => self.beta_power = checked_positive(key, number()?)?,
-            _ => {
+            ("fresnel", Path(path)) => self.fresnel_file = path,
+            ("beta_normal", Number(x)) => self.beta_normal = checked_positive(key, x)?,
+            ("beta_grazing", Number(x)) => self.beta_grazing = checked_positive(key, x)?,
+            ("beta_power", Number(x)) => self.beta_power = checked_positive(key, x)?,
+            (_, value) => {
+                let wanted = match key {
+                    "kd" => "three numbers [r, g, b]",
+                    "extrapolate_g" => "true or false",
+                    "fresnel" => "a path",
+                    _ => "a number",
+                };
                 return Err(Error::invalid(
-                    "material key",
                     key,
-                    one_of("key", MATERIAL_KEYS, key),
-                ))
+                    format!("{value:?}"),
+                    format!("must be {wanted}"),
+                ));
             }
         }
         Ok(())
@@ -312,6 +356,23 @@ fn parse_albedo(value: &str) -> Result<[f64; 3]> {
     ])
 }
 
+/// The message [`parse_number`] gives a non-finite number, for numbers that arrive typed.
+fn finite_number(key: &str, v: f64) -> Result<f64> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(Error::invalid(
+            key,
+            v,
+            "must be a finite number (NaN and infinity are not allowed)",
+        ))
+    }
+}
+
+fn unknown_key(key: &str) -> Error {
+    Error::invalid("material key", key, one_of("key", MATERIAL_KEYS, key))
+}
+
 fn checked_finite(key: &str, v: f64) -> Result<f64> {
     if v.is_finite() {
         Ok(v)
@@ -356,26 +417,10 @@ fn checked_positive(key: &str, v: f64) -> Result<f64> {
 /// "valid <what>s: …; did you mean `x`?" for an unknown name.
 fn one_of(what: &str, valid: &[&str], got: &str) -> String {
     let mut message = format!("valid {what}s are {}", valid.join(", "));
-    if let Some(near) = valid.iter().min_by_key(|v| edit_distance(v, got)) {
+    if let Some(near) = nearest(valid, got) {
         message.push_str(&format!("; did you mean `{near}`?"));
     }
     message
-}
-
-/// Levenshtein distance (for "did you mean"); shared by material and scene files.
-pub fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut diagonal = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let substitute = diagonal + usize::from(ca != *cb);
-            diagonal = row[j + 1];
-            row[j + 1] = substitute.min(row[j] + 1).min(diagonal + 1);
-        }
-    }
-    row[b.len()]
 }
 
 #[cfg(test)]
@@ -606,12 +651,5 @@ mod tests {
         );
         m.set("fresnel", "/nonexistent/shikki.csv").unwrap();
         assert!(matches!(m.fresnel_table(), Err(Error::Read { .. })));
-    }
-
-    #[test]
-    fn edit_distance_spot_values() {
-        assert_eq!(edit_distance("kitten", "sitting"), 3);
-        assert_eq!(edit_distance("", "abc"), 3);
-        assert_eq!(edit_distance("m", "m"), 0);
     }
 }

@@ -20,6 +20,9 @@ use toml::de::{DeTable, DeValue};
 
 use super::fresnel::FresnelTable;
 use super::material::{LacquerMaterial, MATERIAL_KEYS};
+use crate::text::nearest;
+// Public only for the scene loader's imports, until they name `crate::text`.
+use crate::text::read_text_file;
 use crate::{Error, Result};
 
 /// The key that names the preset a file starts from.
@@ -33,38 +36,6 @@ pub fn load_material_file(path: &Path) -> Result<LacquerMaterial> {
     let text = read_text_file(path, MAX_MATERIAL_FILE_BYTES, "material")?;
     let base_dir = path.parent().unwrap_or(Path::new(""));
     material_from_toml_str(&text, base_dir, &path.display().to_string())
-}
-
-/// Reads a text input (material, scene, CSV) whole: refused from its length above `max_bytes`
-/// (before anything is read), and a byte that is not UTF-8 is a parse error at its line. Shared
-/// by every text loader; `kind` names the file in messages ("scene", "Fresnel CSV").
-pub fn read_text_file(path: &Path, max_bytes: u64, kind: &str) -> Result<String> {
-    let read_error = |source| Error::Read {
-        path: path.to_path_buf(),
-        source,
-    };
-    let length = std::fs::metadata(path).map_err(read_error)?.len();
-    if length > max_bytes {
-        return Err(Error::invalid(
-            format!("{kind} file"),
-            format!("{} ({length} bytes)", path.display()),
-            format!("at most {max_bytes} bytes are read; check that this is the right file"),
-        ));
-    }
-    let bytes = std::fs::read(path).map_err(read_error)?;
-    String::from_utf8(bytes).map_err(|e| {
-        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-        let line = valid.iter().filter(|&&b| b == b'\n').count() + 1;
-        let column = valid.len() - valid.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
-        Error::parse(
-            path.display().to_string(),
-            line,
-            format!(
-                "byte {} of the line is not UTF-8 text; save the {kind} file as UTF-8",
-                column + 1
-            ),
-        )
-    })
 }
 
 /// Parses a material from TOML text; `source` names it in errors, `base_dir` anchors `fresnel`.
@@ -380,10 +351,7 @@ fn unknown_key_message(key: &str) -> String {
         .chain(MATERIAL_KEYS.iter().copied())
         .collect();
     let mut message = format!("unknown key `{key}`; valid keys are {}", valid.join(", "));
-    if let Some(near) = valid
-        .iter()
-        .min_by_key(|v| super::material::edit_distance(v, key))
-    {
+    if let Some(near) = nearest(&valid, key) {
         message.push_str(&format!("; did you mean `{near}`?"));
     }
     message
@@ -591,12 +559,5 @@ mod tests {
             err.contains("scene.toml") && err.contains("did you mean `m`?"),
             "{err}"
         );
-    }
-
-    #[test]
-    fn edit_distance_spot_values() {
-        use crate::model::material::edit_distance;
-        assert_eq!(edit_distance("kitten", "sitting"), 3);
-        assert_eq!(edit_distance("", "ab"), 2);
     }
 }

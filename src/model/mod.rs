@@ -2,7 +2,8 @@
 //! presets, the Fresnel table and the spectral path with its CIE tables.
 //!
 //! This module is the single source of truth that the CPU oracle and the GPU shaders are checked
-//! against. It has no Vulkan, no I/O beyond reading a Fresnel CSV, and no rendering; it must not
+//! against. It has no Vulkan and no rendering, and no I/O of its own: a material file, and the
+//! Fresnel CSV a material names, are read through [`crate::text::read_text_file`]. It must not
 //! depend on `gpu/`, `raster/` or `oracle/`.
 
 pub mod brdf;

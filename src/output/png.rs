@@ -40,9 +40,9 @@ pub fn encode_png(image: &HdrImage, settings: &PngSettings) -> Result<Vec<u8>> {
 
     let mut bytes = Vec::new();
     // Fixed compression and filter choices and no metadata chunks (no time stamp): the same
-    // pixels always give the same bytes with a given `png` crate version. zlib level 3: on the
-    // default scene at 1024², 37 ms and 458 kB against 123 ms and 408 kB for the encoder's
-    // "balanced" default (BENCHMARKS.md), which made encoding the slowest part of a batch job.
+    // pixels always give the same bytes with a given `png` crate version. zlib level 3 instead of
+    // the encoder's "balanced" default: far faster for slightly larger files, where encoding was
+    // the slowest part of a batch job (figures in BENCHMARKS.md, "Before / after").
     let encoder = PngEncoder::new_with_quality(
         Cursor::new(&mut bytes),
         CompressionType::Level(PNG_ZLIB_LEVEL),

@@ -147,7 +147,7 @@ impl PngSettings {
 ///
 /// Evaluated in f64: each step is non-decreasing in exact arithmetic, and in f64 its rounding
 /// error (~1e-16) is far below the spacing of f32 inputs, so the result is non-decreasing in the
-/// radiance — which [`Srgb8Encoder`] relies on. (In f32 the ACES quotient's rounding made the
+/// radiance — which [`Srgb8Encoder`] relies on. (In f32 the ACES quotient's rounding makes the
 /// code step back by one near some thresholds, e.g. 29 → 28 around 0.0217475.)
 pub fn to_srgb8(radiance: f32, settings: &PngSettings) -> u8 {
     let exposed = f64::from(radiance) * f64::from(settings.exposure_ev).exp2();
@@ -158,9 +158,9 @@ pub fn to_srgb8(radiance: f32, settings: &PngSettings) -> u8 {
 }
 
 /// [`to_srgb8`] for fixed settings as 255 thresholds: the code of x is the number of thresholds
-/// ≤ x, read from a table instead of computing a tone curve and a `powf` per channel (the
-/// display transform of a 512² image: 19 ms of CPU before, ~4 ms now; BENCHMARKS.md). Same bytes
-/// as `to_srgb8`:
+/// ≤ x, read from a table instead of computing a tone curve and a `powf` per channel, which
+/// was most of `encode_png`'s time (BENCHMARKS.md, "PNG display transform"). Same bytes as
+/// `to_srgb8`:
 ///
 /// `to_srgb8` is non-decreasing in x, so the x with code ≥ k form a half-line starting at
 /// threshold t_k, the smallest f32 with `to_srgb8 ≥ k`. Non-negative f32 order like their bit
@@ -349,8 +349,8 @@ mod tests {
         }
     }
 
-    /// Every non-negative finite f32 (2^31 of them) for each curve at 0 EV; about 22 s per curve
-    /// in release on 2 cores:
+    /// Every non-negative finite f32 (2^31 of them) for each curve at 0 EV; too slow for every
+    /// run (its time is in BENCHMARKS.md, "PNG display transform"):
     /// `cargo test --release --lib srgb8_encoder_equals_to_srgb8_on_every_float -- --ignored`.
     #[test]
     #[ignore]

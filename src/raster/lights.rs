@@ -20,7 +20,7 @@ pub enum Light {
 }
 
 /// The most lights one draw takes (the size of the shader's light array).
-pub const MAX_LIGHTS: usize = 16;
+pub use crate::gpu::shaders::interface::MAX_LIGHTS;
 
 const SYNTAX: &str = "expected `dir:x,y,z:r,g,b` (direction towards the light, irradiance) or \
                       `point:x,y,z:r,g,b` (position, intensity per steradian), e.g. dir:0,1,1:3,3,3";

@@ -6,15 +6,13 @@
 
 pub mod camera;
 pub mod draw;
-mod draw_record;
-mod draw_targets;
-pub mod gpu_mesh;
 pub mod lathe;
 pub mod lights;
 pub mod mesh;
 pub mod mesh_io;
 
 pub use camera::Camera;
-pub use gpu_mesh::GpuMesh;
+pub use draw::gpu_mesh;
+pub use draw::GpuMesh;
 pub use lights::{default_lights, Light, MAX_LIGHTS};
 pub use mesh::{BuiltinMesh, Mesh};

@@ -373,8 +373,6 @@ pub fn set_path(root: &mut Node, path: &str, value: Node) -> Result<()> {
     Ok(())
 }
 
-pub use crate::model::material::edit_distance;
-
 /// "unknown key `x` in [camera]; valid keys are …; did you mean `y`?"
 pub fn unknown_key(entry: &Entry, section: &str, valid: &[&str]) -> Error {
     let mut message = format!(
@@ -382,7 +380,7 @@ pub fn unknown_key(entry: &Entry, section: &str, valid: &[&str]) -> Error {
         entry.key,
         valid.join(", ")
     );
-    if let Some(near) = valid.iter().min_by_key(|v| edit_distance(v, &entry.key)) {
+    if let Some(near) = crate::text::nearest(valid, &entry.key) {
         message.push_str(&format!("; did you mean `{near}`?"));
     }
     entry.key_at.error(message)

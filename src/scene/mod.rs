@@ -2,6 +2,10 @@
 //! read from TOML files (docs/scene.md), overridden by `--set`/sweeps, rendered by
 //! [`SceneRenderer`] and multiplied into many images by [`batch`].
 //!
+//! A [`Scene`] is the one description every entry point builds — the CLI from its flags or a
+//! scene file, a batch from each job, the C API from its calls — and [`SceneRenderer`] is the one
+//! renderer they all draw it with.
+//!
 //! Owns the scene schema and its errors; the model (`model/`), meshes (`raster/mesh*`), the
 //! environment prefilter and the draw are used, never changed, here.
 
@@ -16,6 +20,7 @@ use std::sync::Arc;
 
 use glam::{DMat4, DVec3};
 
+pub use crate::environment::{EnvironmentLight, EnvironmentSource};
 use crate::model::LacquerMaterial;
 pub use crate::output::ToneCurve;
 pub use crate::raster::draw::Background;
@@ -55,15 +60,54 @@ pub enum MeshSource {
 }
 
 /// The environment light (SPEC §4).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, PartialEq)]
 pub enum EnvironmentSpec {
     None,
-    /// `source`: `builtin:studio` or the path of a `.hdr`/`.exr` equirectangular map.
+    /// A map (`builtin:studio`, a `.hdr`/`.exr` path, or one in memory) and how it lights the
+    /// world.
     Map {
-        source: String,
-        intensity: f64,
-        rotation_deg: f64,
+        source: EnvironmentSource,
+        light: EnvironmentLight,
     },
+}
+
+impl EnvironmentSpec {
+    /// A map named by `builtin:studio` or a path, as stored and unrotated.
+    pub fn named(source: impl Into<String>) -> Self {
+        EnvironmentSpec::Map {
+            source: EnvironmentSource::Named(source.into()),
+            light: EnvironmentLight::default(),
+        }
+    }
+}
+
+impl std::fmt::Debug for EnvironmentSpec {
+    /// Flat: `Map { source, intensity, rotation_deg }`. A batch job's scene hash reads this text
+    /// (`batch::scene_hash`), so it names values, not how the type groups them.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            EnvironmentSpec::None => f.write_str("None"),
+            EnvironmentSpec::Map { source, light } => f
+                .debug_struct("Map")
+                .field("source", source)
+                .field("intensity", &light.intensity)
+                .field("rotation_deg", &light.rotation_deg)
+                .finish(),
+        }
+    }
+}
+
+impl Default for Scene {
+    /// Nothing in it: no objects, no lights, no environment, the default camera and output.
+    fn default() -> Self {
+        Scene {
+            camera: Camera::default(),
+            objects: Vec::new(),
+            lights: Vec::new(),
+            environment: EnvironmentSpec::None,
+            output: OutputSpec::default(),
+        }
+    }
 }
 
 /// Image size, anti-aliasing and the PNG conversion (SPEC §1).
@@ -126,11 +170,7 @@ fn fallback_default_scene() -> Scene {
         camera: Camera::default(),
         objects: vec![bowl(-1.1, "smooth-red"), bowl(1.1, "smooth-black")],
         lights: crate::raster::default_lights(),
-        environment: EnvironmentSpec::Map {
-            source: "builtin:studio".into(),
-            intensity: 1.0,
-            rotation_deg: 0.0,
-        },
+        environment: EnvironmentSpec::named(crate::environment::load::BUILTIN_STUDIO),
         output: OutputSpec::default(),
     }
 }
@@ -155,7 +195,7 @@ mod tests {
         }
         assert!(matches!(
             &scene.environment,
-            EnvironmentSpec::Map { source, .. } if source == "builtin:studio"
+            EnvironmentSpec::Map { source, .. } if source.name() == "builtin:studio"
         ));
         assert_eq!(scene.output.background, Background::Environment);
     }

@@ -2,8 +2,9 @@
 //!
 //! Owns the key names, their defaults and types, and the rule that every error names where the
 //! value was written. The ranges of each quantity stay with their owners (`Camera::validate`,
-//! `Light::validate`, `LacquerMaterial::set/validate`, `Mesh::validate`); their messages are
-//! wrapped with the location here, never re-checked.
+//! `Light::validate`, `LacquerMaterial::set_value/validate`, `Mesh::validate`); their messages
+//! are wrapped with the location here, never re-checked. Values reach them typed: a TOML number
+//! is never turned back into text.
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock};
@@ -15,14 +16,15 @@ use super::sections::{environment, light, output};
 use super::{EnvironmentSpec, MeshSource, OutputSpec, Scene, SceneObject};
 use crate::environment::load::BUILTIN_STUDIO;
 use crate::model::fresnel::FresnelTable;
-use crate::model::material::MATERIAL_KEYS;
-use crate::model::material_file::{load_material_file, read_text_file};
+use crate::model::material::{MaterialValue, MATERIAL_KEYS};
+use crate::model::material_file::load_material_file;
 use crate::model::LacquerMaterial;
 use crate::output::OutputFormat;
 use crate::raster::lights::{default_lights, MAX_LIGHTS};
 use crate::raster::mesh::{BuiltinMesh, Mesh};
 use crate::raster::mesh_io::load_mesh;
 use crate::raster::Camera;
+use crate::text::read_text_file;
 use crate::{Error, Result};
 
 /// The largest scene file read (16 MiB): hand-written scenes are a few KiB.
@@ -254,11 +256,7 @@ pub fn scene_from_document(root: &Node) -> Result<Scene> {
         }
     };
     let environment = match get("environment") {
-        None => EnvironmentSpec::Map {
-            source: BUILTIN_STUDIO.into(),
-            intensity: 1.0,
-            rotation_deg: 0.0,
-        },
+        None => EnvironmentSpec::named(BUILTIN_STUDIO),
         Some(node) => environment(node)?,
     };
     let output = match get("output") {
@@ -480,17 +478,13 @@ fn material(node: &Node) -> Result<LacquerMaterial> {
         .filter(|e| e.key != "file" && e.key != "preset")
     {
         let n = &e.node;
-        let text = match (e.key.as_str(), &n.value) {
-            ("kd", Value::Array(_)) => {
-                let kd = vec3(n, "kd")?;
-                format!("{},{},{}", kd.x, kd.y, kd.z)
-            }
-            ("extrapolate_g", Value::Bool(b)) => b.to_string(),
+        let value = match (e.key.as_str(), &n.value) {
+            ("kd", Value::Array(_)) => MaterialValue::Rgb(vec3(n, "kd")?.to_array()),
+            ("extrapolate_g", Value::Bool(b)) => MaterialValue::Bool(*b),
             ("fresnel", Value::Str(path)) => {
                 let resolved = doc::resolve_path(&n.at, path);
                 located(&n.at, FresnelTable::from_csv_file(&resolved))?;
-                material.fresnel_file = Some(resolved);
-                continue;
+                MaterialValue::Path(Some(resolved))
             }
             ("kd", _) => {
                 return Err(n
@@ -509,9 +503,9 @@ fn material(node: &Node) -> Result<LacquerMaterial> {
                     show(n)
                 )))
             }
-            (key, _) => number(n, key)?.to_string(),
+            (key, _) => MaterialValue::Number(number(n, key)?),
         };
-        located(&n.at, material.set(&e.key, &text))?;
+        located(&n.at, material.set_value(&e.key, value))?;
     }
     // A rule tying fields together points at the failing field if this table set it.
     material.validate().map_err(|e| {

@@ -1,21 +1,24 @@
-//! [`SceneRenderer`]: draws a [`Scene`] on the GPU, keeping what jobs of a batch share.
+//! [`SceneRenderer`]: the one renderer. The CLI (flags, scene files), batch jobs and the C API
+//! all draw their [`Scene`] through it, so they share every step from the environment to the
+//! image.
 //!
-//! Kept across renders: the draw pipelines ([`LacquerRenderer`]), the prefilter pipelines, each
-//! distinct environment's prefiltered cube (keyed by source, intensity, rotation and prefilter
-//! parameters), built-in meshes, placed (transformed) meshes and each mesh's device copy
-//! ([`GpuMesh`], keyed by the identity of its `Arc<Mesh>`, which the cache holds so the identity
-//! cannot be reused). Owns no rendering maths: the draw is `raster::draw`, the prefilter
-//! `environment::gpu`.
+//! Kept across renders: the draw pipelines ([`LacquerRenderer`]), environment preparation
+//! ([`EnvironmentPreparer`]: prefilter pipelines, disk cache), each distinct environment's
+//! prefiltered cube (keyed by source and light; the prefilter parameters follow from the source
+//! and the device), built-in meshes, placed (transformed) meshes and each mesh's device copy
+//! ([`GpuMesh`]). Entries keyed by the identity of an `Arc` hold that `Arc`, so the identity
+//! cannot be reused while the entry lives. Owns no rendering maths: the draw is `raster::draw`,
+//! the environment `environment::prepare`. Prints nothing: warnings wait in
+//! [`SceneRenderer::take_warnings`].
 
-use std::collections::HashMap;
 use std::sync::Arc;
 
 use super::parse::cached_file_mesh;
 use super::{EnvironmentSpec, MeshSource, Scene};
-use crate::environment::disk_cache::{prefilter_cached, EnvironmentDiskCache};
-use crate::environment::gpu::{default_params, GpuEnvironment, GpuPrefilter};
-use crate::environment::load::load_environment;
+use crate::environment::disk_cache::EnvironmentDiskCache;
+use crate::environment::gpu::GpuEnvironment;
 use crate::environment::params::ViewBlur;
+use crate::environment::{EnvironmentLight, EnvironmentPreparer, EnvironmentSource};
 use crate::gpu::GpuContext;
 use crate::model::{BrdfParams, FresnelTable};
 use crate::output::HdrImage;
@@ -25,29 +28,41 @@ use crate::raster::draw::{
 use crate::raster::gpu_mesh::GpuMesh;
 use crate::raster::mesh::{BuiltinMesh, Mesh};
 use crate::raster::mesh_io::transform_mesh;
-use crate::Result;
+use crate::{Result, Warning};
 
 /// More distinct environments than this in one run (a sweep over rotation, say) evicts the oldest:
 /// a 1k-face cube with its layers is tens of MB of device memory.
-const MAX_CACHED_ENVIRONMENTS: usize = 8;
+const DEFAULT_CACHED_ENVIRONMENTS: usize = 8;
 /// Placed meshes kept (a bowl is ~100k triangles, ~5 MB).
 const MAX_CACHED_PLACED_MESHES: usize = 32;
 /// Device copies kept: one per placed mesh plus the built-ins and files they were made from.
 const MAX_CACHED_GPU_MESHES: usize = 48;
 
+struct CachedEnvironment {
+    source: EnvironmentSource,
+    light: EnvironmentLight,
+    prefiltered: GpuEnvironment,
+}
+
+/// A mesh moved into the world; `base` pins the identity it is found by.
+struct PlacedMesh {
+    base: Arc<Mesh>,
+    transform_bits: [u64; 16],
+    mesh: Arc<Mesh>,
+}
+
 /// Renders scenes, reusing pipelines, prefiltered environments and meshes across calls.
 pub struct SceneRenderer {
     draw: LacquerRenderer,
-    /// Built on the first environment the disk cache does not hold.
-    prefilter: Option<GpuPrefilter>,
-    disk_cache: Option<EnvironmentDiskCache>,
-    environments: Vec<(String, GpuEnvironment)>,
-    builtin: HashMap<&'static str, Arc<Mesh>>,
-    placed: Vec<(String, Arc<Mesh>)>,
-    /// Uploaded meshes, oldest first; the `Arc` pins the identity the entry is found by.
+    preparer: EnvironmentPreparer,
+    environments: Vec<CachedEnvironment>,
+    max_environments: usize,
+    builtin: Vec<(BuiltinMesh, Arc<Mesh>)>,
+    placed: Vec<PlacedMesh>,
+    /// Uploaded meshes, oldest first.
     gpu_meshes: Vec<(Arc<Mesh>, GpuMesh)>,
-    /// Environment warnings (replaced pixels) already printed, so a batch says each once.
-    warned: Vec<String>,
+    warnings: Vec<Warning>,
+    validation_fails_render: bool,
 }
 
 impl SceneRenderer {
@@ -64,14 +79,39 @@ impl SceneRenderer {
     pub fn with_disk_cache(disk_cache: Option<EnvironmentDiskCache>) -> Self {
         SceneRenderer {
             draw: LacquerRenderer::new(),
-            prefilter: None,
-            disk_cache,
+            preparer: EnvironmentPreparer::new(disk_cache),
             environments: Vec::new(),
-            builtin: HashMap::new(),
+            max_environments: DEFAULT_CACHED_ENVIRONMENTS,
+            builtin: Vec::new(),
             placed: Vec::new(),
             gpu_meshes: Vec::new(),
-            warned: Vec::new(),
+            warnings: Vec::new(),
+            validation_fails_render: true,
         }
+    }
+
+    /// Replaces the on-disk environment cache (`None`: always prefilter).
+    pub fn set_disk_cache(&mut self, disk_cache: Option<EnvironmentDiskCache>) {
+        self.preparer.set_disk_cache(disk_cache);
+    }
+
+    /// How many prefiltered environments stay on the device between renders (at least 1). One
+    /// suits a caller that changes maps rarely and wants the memory back at once.
+    pub fn set_environment_capacity(&mut self, count: usize) {
+        self.max_environments = count.max(1);
+        self.evict_environments(self.max_environments);
+    }
+
+    /// Whether a render that drew validation-layer messages fails with them (the default) or
+    /// leaves them in the context for the caller to take (`GpuContext::take_validation_messages`).
+    pub fn set_validation_fails_render(&mut self, fails: bool) {
+        self.validation_fails_render = fails;
+    }
+
+    /// The warnings of the renders so far (oldest first), removed from the renderer: the
+    /// caller prints or forwards them.
+    pub fn take_warnings(&mut self) -> Vec<Warning> {
+        std::mem::take(&mut self.warnings)
     }
 
     /// Draws `scene` and returns linear radiance (RGBA, alpha = coverage).
@@ -119,7 +159,7 @@ impl SceneRenderer {
                     .map(|(_, g)| g)
             })
             .collect();
-        let environment = env_index.map(|k| &self.environments[k].1);
+        let environment = env_index.map(|k| &self.environments[k].prefiltered);
         let (image, timings) = self.draw.render_meshes(
             gpu,
             &DrawScene {
@@ -137,7 +177,9 @@ impl SceneRenderer {
             },
             options,
         )?;
-        gpu.check_validation()?;
+        if self.validation_fails_render {
+            gpu.check_validation()?;
+        }
         Ok((image, timings))
     }
 
@@ -163,96 +205,76 @@ impl SceneRenderer {
         Ok(())
     }
 
-    fn base_mesh(&mut self, source: &MeshSource) -> Result<(String, Arc<Mesh>)> {
+    fn base_mesh(&mut self, source: &MeshSource) -> Result<Arc<Mesh>> {
         Ok(match source {
             MeshSource::Builtin(builtin) => {
-                let name = builtin_name(*builtin);
-                let mesh = self
-                    .builtin
-                    .entry(name)
-                    .or_insert_with(|| Arc::new(builtin.mesh()))
-                    .clone();
-                (name.to_string(), mesh)
+                if let Some((_, mesh)) = self.builtin.iter().find(|(b, _)| b == builtin) {
+                    return Ok(mesh.clone());
+                }
+                let mesh = Arc::new(builtin.mesh());
+                self.builtin.push((*builtin, mesh.clone()));
+                mesh
             }
-            MeshSource::File(path) => (format!("file:{}", path.display()), cached_file_mesh(path)?),
-            MeshSource::Inline(mesh) => (format!("inline:{:p}", Arc::as_ptr(mesh)), mesh.clone()),
+            MeshSource::File(path) => cached_file_mesh(path)?,
+            MeshSource::Inline(mesh) => mesh.clone(),
         })
     }
 
     /// The mesh in world space; identical placements of a mesh are transformed once.
     fn placed_mesh(&mut self, source: &MeshSource, transform: glam::DMat4) -> Result<Arc<Mesh>> {
-        let (name, base) = self.base_mesh(source)?;
+        let base = self.base_mesh(source)?;
         if transform == glam::DMat4::IDENTITY {
             return Ok(base);
         }
-        let bits: Vec<u64> = transform
-            .to_cols_array()
+        let transform_bits = transform.to_cols_array().map(f64::to_bits);
+        if let Some(hit) = self
+            .placed
             .iter()
-            .map(|x| x.to_bits())
-            .collect();
-        let key = format!("{name}|{bits:x?}");
-        if let Some((_, mesh)) = self.placed.iter().find(|(k, _)| *k == key) {
-            return Ok(mesh.clone());
+            .find(|p| Arc::ptr_eq(&p.base, &base) && p.transform_bits == transform_bits)
+        {
+            return Ok(hit.mesh.clone());
         }
         let mesh = Arc::new(transform_mesh(&base, transform));
         mesh.validate()?;
         if self.placed.len() >= MAX_CACHED_PLACED_MESHES {
             self.placed.remove(0);
         }
-        self.placed.push((key, mesh.clone()));
+        self.placed.push(PlacedMesh {
+            base,
+            transform_bits,
+            mesh: mesh.clone(),
+        });
         Ok(mesh)
     }
 
-    /// Index of the prefiltered environment in the cache, prefiltering it on first use.
+    /// Index of the prefiltered environment in the cache, prepared on first use.
     fn environment(&mut self, gpu: &GpuContext, spec: &EnvironmentSpec) -> Result<Option<usize>> {
-        let EnvironmentSpec::Map {
-            source,
-            intensity,
-            rotation_deg,
-        } = spec
-        else {
+        let EnvironmentSpec::Map { source, light } = spec else {
             return Ok(None);
         };
-        // The prefilter parameters are a function of the source's width, so the source names
-        // them too.
-        let key = format!("{source}|{intensity:?}|{rotation_deg:?}");
-        if let Some(k) = self.environments.iter().position(|(k, _)| *k == key) {
+        if let Some(k) = self
+            .environments
+            .iter()
+            .position(|c| c.source.is(source) && c.light.same_bits(light))
+        {
             return Ok(Some(k));
         }
-        let loaded = load_environment(source)?;
-        let params = default_params(gpu, loaded.image.width);
-        if loaded.replaced_pixels > 0 && !self.warned.contains(source) {
-            eprintln!(
-                "warning: {source}: {} pixel value(s) were NaN, infinite or negative and were \
-                 replaced by 0",
-                loaded.replaced_pixels
-            );
-            self.warned.push(source.clone());
-        }
-        // One prefilter (its pipelines) for the whole run; repeated runs are hazard-free under
-        // synchronisation validation (tests/gpu_environment.rs, one_prefilter_runs_many_times…).
-        let env = prefilter_cached(
-            gpu,
-            &mut self.prefilter,
-            self.disk_cache.as_ref(),
-            &loaded.image,
-            &params,
-            *intensity,
-            *rotation_deg,
-        )?;
-        if self.environments.len() >= MAX_CACHED_ENVIRONMENTS {
-            self.environments.remove(0);
-        }
-        self.environments.push((key, env));
+        // Room first: the old cube's memory is free before the new one is made.
+        self.evict_environments(self.max_environments - 1);
+        let prefiltered = self
+            .preparer
+            .prepare(gpu, source, *light, &mut self.warnings)?;
+        self.environments.push(CachedEnvironment {
+            source: source.clone(),
+            light: *light,
+            prefiltered,
+        });
         Ok(Some(self.environments.len() - 1))
     }
-}
 
-fn builtin_name(mesh: BuiltinMesh) -> &'static str {
-    match mesh {
-        BuiltinMesh::Sphere => "builtin:sphere",
-        BuiltinMesh::Board => "builtin:board",
-        BuiltinMesh::Bowl => "builtin:bowl",
-        BuiltinMesh::Plate => "builtin:plate",
+    /// Drops the oldest prefiltered environments until at most `keep` remain.
+    fn evict_environments(&mut self, keep: usize) {
+        let excess = self.environments.len().saturating_sub(keep);
+        self.environments.drain(..excess);
     }
 }

@@ -8,7 +8,7 @@ use super::parse::{
     format_of, located, number, show, string, table, vec3, whole, ENVIRONMENT_KEYS, LIGHT_KEYS,
     OUTPUT_KEYS,
 };
-use super::{EnvironmentSpec, OutputSpec};
+use super::{EnvironmentLight, EnvironmentSource, EnvironmentSpec, OutputSpec};
 use crate::environment::load::BUILTIN_STUDIO;
 use crate::output::ToneCurve;
 use crate::raster::draw::{Background, SUPPORTED_SAMPLES};
@@ -106,9 +106,11 @@ pub(super) fn environment(node: &Node) -> Result<EnvironmentSpec> {
         path.display().to_string()
     };
     Ok(EnvironmentSpec::Map {
-        source: resolved,
-        intensity,
-        rotation_deg,
+        source: EnvironmentSource::Named(resolved),
+        light: EnvironmentLight {
+            intensity,
+            rotation_deg,
+        },
     })
 }
 

@@ -5,7 +5,8 @@
 
 use super::{copy_to_image, cube_bytes, cube_image_usage, GpuEnvironment};
 use crate::environment::image::{CubeImage, PrefilteredEnvironment};
-use crate::environment::params::{MAX_FACE_SIZE, MAX_LAYERS, MIN_LAYER_FACE};
+use crate::environment::params::{MAX_FACE_SIZE, MIN_LAYER_FACE};
+use crate::gpu::shaders::interface::MAX_ENV_LAYERS;
 use crate::gpu::{Buffer, BufferDesc, BufferUsage, GpuContext, ImageDesc};
 use crate::{Error, Result};
 
@@ -64,12 +65,12 @@ fn storage_buffer(gpu: &GpuContext, name: &str, cube: &CubeImage) -> Result<Buff
 /// The shape `GpuPrefilter::run` produces, so the renderer can sample the result.
 pub(crate) fn validate(env: &PrefilteredEnvironment) -> Result<()> {
     let k = env.layers.len();
-    if !(2..=MAX_LAYERS as usize).contains(&k) {
+    if !(2..=MAX_ENV_LAYERS).contains(&k) {
         return Err(Error::invalid(
             "environment layers",
             k,
             format!(
-                "K must be in 2..={MAX_LAYERS} (layer 0 is the sharp map); re-run the prefilter"
+                "K must be in 2..={MAX_ENV_LAYERS} (layer 0 is the sharp map); re-run the prefilter"
             ),
         ));
     }

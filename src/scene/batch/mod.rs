@@ -28,8 +28,8 @@ use sha2::{Digest, Sha256};
 use super::doc::{self, Node, Origin, Value};
 use super::parse::{table_get, SceneDocument, MAX_SCENE_FILE_BYTES};
 use super::Scene;
-use crate::model::material_file::read_text_file;
 use crate::output::OutputFormat;
+use crate::text::read_text_file;
 use crate::Result;
 
 pub use run::{run_batch, BatchOptions, BatchSummary};
@@ -286,7 +286,11 @@ pub fn scene_hash(scene: &Scene, format: OutputFormat) -> String {
             stamp(path);
         }
     }
-    if let super::EnvironmentSpec::Map { source, .. } = &scene.environment {
+    if let super::EnvironmentSpec::Map {
+        source: super::EnvironmentSource::Named(source),
+        ..
+    } = &scene.environment
+    {
         stamp(Path::new(source));
     }
     hasher

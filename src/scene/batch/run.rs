@@ -147,6 +147,9 @@ pub fn run_batch(
             }
             started += 1;
             let message = render_job(gpu, &mut renderer, plan, job, &options.out_dir, &previous);
+            for warning in renderer.take_warnings() {
+                progress.suspend(|| eprintln!("warning: {warning}"));
+            }
             if let Message::Failed { row } = &message {
                 progress.suspend(|| eprintln!("error: job {}: {}", row.job, row.status));
             }

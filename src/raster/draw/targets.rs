@@ -16,20 +16,9 @@
 //! the previous render's last use of each target (pipeline barriers order against all earlier
 //! submissions on the queue), and every render clears what it draws into.
 
+use super::get_or_try_insert;
 use crate::gpu::{Buffer, BufferDesc, GpuContext, Image, ImageDesc};
 use crate::Result;
-
-/// How a draw renders: which attachments its targets have.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum TargetKind {
-    /// G-buffer for the compute shading pass (the lacquer draw).
-    Deferred,
-    /// Colour + resolve (the trivial-shader draw of the benchmark).
-    Forward,
-}
-
-/// Width, height, samples, kind.
-pub(crate) type TargetKey = (u32, u32, u32, TargetKind);
 
 /// Largest multisampled colour attachment (bytes); the depth target is a quarter of it.
 pub const MAX_COLOR_TARGET_BYTES: u64 = 16 << 20;
@@ -42,73 +31,81 @@ pub fn strip_rows(width: u32, height: u32, samples: u32, budget: u64) -> u32 {
     rows.min(u64::from(height)) as u32
 }
 
-/// The colour attachments of one kind of draw.
-// One value per renderer and kind: boxing the larger variant would save nothing.
-#[allow(clippy::large_enum_variant)]
-pub(crate) enum Attachments {
-    Deferred {
-        /// xyz: interpolated position; w: object index + 1 (0 where no mesh covers the sample).
-        position: Image,
-        /// xyz: interpolated normal.
-        normal: Image,
-        /// The shaded, sample-averaged strip (single-sampled).
-        output: Image,
-        /// Single-sampled depth of the shading pass: 0 where a G-buffer sample is covered.
-        coverage: Image,
-    },
-    Forward {
-        color: Image,
-        /// The single-sampled image the MSAA colour resolves into (None without MSAA).
-        resolve: Option<Image>,
-    },
+/// Width, height, samples.
+pub(crate) type TargetSize = (u32, u32, u32);
+
+/// The colour attachments of one kind of draw, made for a strip of `rows` rows.
+pub(crate) trait Attachments: Sized {
+    fn new(gpu: &GpuContext, width: u32, rows: u32, samples: u32) -> Result<Self>;
 }
 
-pub(crate) struct DrawTargets {
-    pub key: TargetKey,
+/// The lacquer draw's attachments.
+pub(crate) struct Deferred {
+    /// xyz: interpolated position; w: object index + 1 (0 where no mesh covers the sample).
+    pub position: Image,
+    /// xyz: interpolated normal.
+    pub normal: Image,
+    /// The shaded, sample-averaged strip (single-sampled).
+    pub output: Image,
+    /// Single-sampled depth of the shading pass: 0 where a G-buffer sample is covered.
+    pub coverage: Image,
+}
+
+impl Attachments for Deferred {
+    fn new(gpu: &GpuContext, width: u32, rows: u32, samples: u32) -> Result<Self> {
+        let gbuffer =
+            |name| gpu.create_image(ImageDesc::sampled_target(name, width, rows, samples));
+        Ok(Deferred {
+            position: gbuffer("g-buffer position")?,
+            normal: gbuffer("g-buffer normal")?,
+            output: gpu.create_image(ImageDesc::color_target("shaded", width, rows, 1))?,
+            coverage: gpu.create_image(ImageDesc::depth_target("coverage", width, rows, 1))?,
+        })
+    }
+}
+
+/// The forward draw's attachments (the benchmark's trivial shader).
+pub(crate) struct Forward {
+    pub color: Image,
+    /// The single-sampled image the MSAA colour resolves into (None without MSAA).
+    pub resolve: Option<Image>,
+}
+
+impl Attachments for Forward {
+    fn new(gpu: &GpuContext, width: u32, rows: u32, samples: u32) -> Result<Self> {
+        Ok(Forward {
+            color: gpu.create_image(ImageDesc::color_target("color", width, rows, samples))?,
+            resolve: if samples > 1 {
+                Some(gpu.create_image(ImageDesc::color_target("resolve", width, rows, 1))?)
+            } else {
+                None
+            },
+        })
+    }
+}
+
+/// The targets of one kind of draw: its attachments, depth and the readback buffer.
+pub(crate) struct DrawTargets<A> {
+    pub size: TargetSize,
     /// Rows of the image each target holds (the last strip may use fewer).
     pub strip_rows: u32,
-    pub attachments: Attachments,
+    pub attachments: A,
     pub depth: Image,
     pub readback: Buffer,
     /// Whether a render used these targets before (then the first barriers wait for that use).
     pub used: bool,
 }
 
-impl DrawTargets {
-    pub fn new(gpu: &GpuContext, key: TargetKey, budget: u64) -> Result<Self> {
-        let (width, height, samples, kind) = key;
+impl<A: Attachments> DrawTargets<A> {
+    fn new(gpu: &GpuContext, size: TargetSize, budget: u64) -> Result<Self> {
+        let (width, height, samples) = size;
         let rows = strip_rows(width, height, samples, budget);
-        let attachments = match kind {
-            TargetKind::Deferred => Attachments::Deferred {
-                position: gpu.create_image(ImageDesc::sampled_target(
-                    "g-buffer position",
-                    width,
-                    rows,
-                    samples,
-                ))?,
-                normal: gpu.create_image(ImageDesc::sampled_target(
-                    "g-buffer normal",
-                    width,
-                    rows,
-                    samples,
-                ))?,
-                output: gpu.create_image(ImageDesc::color_target("shaded", width, rows, 1))?,
-                coverage: gpu.create_image(ImageDesc::depth_target("coverage", width, rows, 1))?,
-            },
-            TargetKind::Forward => Attachments::Forward {
-                color: gpu.create_image(ImageDesc::color_target("color", width, rows, samples))?,
-                resolve: if samples > 1 {
-                    Some(gpu.create_image(ImageDesc::color_target("resolve", width, rows, 1))?)
-                } else {
-                    None
-                },
-            },
-        };
+        let attachments = A::new(gpu, width, rows, samples)?;
         let depth = gpu.create_image(ImageDesc::depth_target("depth", width, rows, samples))?;
         let image_bytes = u64::from(width) * u64::from(height) * 16;
         let readback = gpu.create_buffer(BufferDesc::readback("readback", image_bytes))?;
         Ok(DrawTargets {
-            key,
+            size,
             strip_rows: rows,
             attachments,
             depth,
@@ -122,8 +119,8 @@ impl DrawTargets {
 /// (batches render one size; keeping several 100 MB sets would only raise peak memory). Real
 /// renders are all deferred, so they hold one set; the benchmark alternates both kinds.
 pub(crate) struct TargetCache {
-    deferred: Option<DrawTargets>,
-    forward: Option<DrawTargets>,
+    deferred: Option<DrawTargets<Deferred>>,
+    forward: Option<DrawTargets<Forward>>,
     /// Colour attachment budget in bytes ([`MAX_COLOR_TARGET_BYTES`]; smaller in tests).
     pub color_budget: u64,
 }
@@ -139,25 +136,35 @@ impl Default for TargetCache {
 }
 
 impl TargetCache {
-    pub fn get(&mut self, gpu: &GpuContext, key: TargetKey) -> Result<&mut DrawTargets> {
-        let current = match key.3 {
-            TargetKind::Deferred => &mut self.deferred,
-            TargetKind::Forward => &mut self.forward,
-        };
-        if current.as_ref().map(|t| t.key) != Some(key) {
-            // Free the old set before allocating the new one: peak memory is one set.
-            *current = None;
-            *current = Some(DrawTargets::new(gpu, key, self.color_budget)?);
-        }
-        match current.as_mut() {
-            Some(targets) => Ok(targets),
-            None => Err(crate::Error::invalid(
-                "render targets",
-                "missing",
-                "internal error",
-            )),
-        }
+    pub fn deferred(
+        &mut self,
+        gpu: &GpuContext,
+        size: TargetSize,
+    ) -> Result<&mut DrawTargets<Deferred>> {
+        of_size(&mut self.deferred, gpu, size, self.color_budget)
     }
+
+    pub fn forward(
+        &mut self,
+        gpu: &GpuContext,
+        size: TargetSize,
+    ) -> Result<&mut DrawTargets<Forward>> {
+        of_size(&mut self.forward, gpu, size, self.color_budget)
+    }
+}
+
+/// The targets in `slot` if they have `size`, else new ones in their place.
+fn of_size<'a, A: Attachments>(
+    slot: &'a mut Option<DrawTargets<A>>,
+    gpu: &GpuContext,
+    size: TargetSize,
+    budget: u64,
+) -> Result<&'a mut DrawTargets<A>> {
+    if slot.as_ref().is_some_and(|t| t.size != size) {
+        // Free the old set before allocating the new one: peak memory is one set.
+        *slot = None;
+    }
+    get_or_try_insert(slot, || DrawTargets::new(gpu, size, budget))
 }
 
 #[cfg(test)]

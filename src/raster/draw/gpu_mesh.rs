@@ -1,21 +1,30 @@
 //! [`GpuMesh`]: a mesh's interleaved vertex buffer and index buffer on the device, uploaded once
 //! and drawn by any number of renders (the scene renderer caches them per `Arc<Mesh>`).
 
+use crate::gpu::shaders::interface::{VERTEX_NORMAL_LOCATION, VERTEX_POSITION_LOCATION};
 use crate::gpu::{Buffer, BufferDesc, BufferUsage, GpuContext, VertexAttribute};
 use crate::raster::mesh::Mesh;
 use crate::Result;
+use std::mem::{offset_of, size_of};
 
-/// Interleaved position (xyz) + normal (xyz), f32.
-pub(crate) const VERTEX_STRIDE: u32 = 24;
+/// One vertex of the interleaved buffer mesh.vert reads.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Vertex {
+    position: [f32; 3],
+    normal: [f32; 3],
+}
+
+pub(crate) const VERTEX_STRIDE: u32 = size_of::<Vertex>() as u32;
 pub(crate) const VERTEX_ATTRIBUTES: [VertexAttribute; 2] = [
     VertexAttribute {
-        location: 0,
-        offset: 0,
+        location: VERTEX_POSITION_LOCATION,
+        offset: offset_of!(Vertex, position) as u32,
         components: 3,
     },
     VertexAttribute {
-        location: 1,
-        offset: 12,
+        location: VERTEX_NORMAL_LOCATION,
+        offset: offset_of!(Vertex, normal) as u32,
         components: 3,
     },
 ];
@@ -32,11 +41,11 @@ impl GpuMesh {
     /// Uploads `mesh` (interleaving positions and normals). An empty mesh gets one-element
     /// buffers (Vulkan has no zero-sized buffers) and draws nothing.
     pub fn upload(gpu: &GpuContext, mesh: &Mesh) -> Result<Self> {
-        let vertices: Vec<[f32; 6]> = mesh
+        let vertices: Vec<Vertex> = mesh
             .positions
             .iter()
             .zip(&mesh.normals)
-            .map(|(p, n)| [p[0], p[1], p[2], n[0], n[1], n[2]])
+            .map(|(&position, &normal)| Vertex { position, normal })
             .collect();
         Ok(GpuMesh {
             vertices: upload(gpu, "mesh vertices", &vertices, BufferUsage::VERTEX)?,

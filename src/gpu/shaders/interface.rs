@@ -1,0 +1,191 @@
+// The one declaration of everything the host and the shaders share: limits, workgroup sizes,
+// binding numbers, specialization-constant ids and the layout of every buffer, push-constant and
+// texel block. build.rs expands it into the GLSL header `interface.glsl` that the shaders
+// `#include`; `gpu/shaders.rs` expands it into the Rust constants and `#[repr(C)]` structs below.
+// build.rs refuses a struct whose Rust layout differs from its GLSL layout (std140/std430), and
+// the tests in `gpu/shaders.rs` hold each block against the offsets in the compiled SPIR-V.
+//
+// The field types are GLSL's (float, int, uint, vec3, vec4, ivec4, uvec4, mat4, [T; N], or a
+// struct declared above); each maps to one Rust type (f32, i32, u32, [f32; 3], …). Constants are
+// integers, written into the header as `#define NAME value`.
+//
+// (No `//!` here: build.rs `include!`s this file.)
+
+shader_interface! {
+    constants {
+        /// The most punctual lights one draw takes (the length of `Frame::light_vector`).
+        MAX_LIGHTS: usize = 16;
+        /// The most environment layers K a prefilter makes and a draw samples.
+        MAX_ENV_LAYERS: usize = 16;
+        /// The most MSAA samples per pixel the shading pass reads from the G-buffer.
+        MAX_SAMPLES: u32 = 4;
+
+        /// `local_size_x` = `local_size_y` of every prefilter step (one workgroup: an 8 × 8 tile
+        /// of one cube face).
+        PREFILTER_WORKGROUP: u32 = 8;
+        /// `local_size_x` of brdf_eval.comp (one invocation per direction triple).
+        BRDF_EVAL_WORKGROUP: u32 = 64;
+
+        /// The draw's set 0: the `Frame` uniform block.
+        FRAME_BINDING: u32 = 0;
+        /// The concatenated Fresnel tables, (angle_deg, r, g, b) per RGBA32F texel; the binding of
+        /// `fresnel_knots` in every pipeline that includes lacquer_brdf.glsl.
+        FRESNEL_KNOTS_BINDING: u32 = 1;
+        /// The draw's environment layers (a sampler array of `MAX_ENV_LAYERS`).
+        ENV_LAYERS_BINDING: u32 = 2;
+        /// The draw's irradiance cube.
+        ENV_IRRADIANCE_BINDING: u32 = 3;
+        /// Every object's `ObjectMaterial`, `OBJECT_MATERIAL_TEXELS` RGBA32F texels each.
+        OBJECT_MATERIAL_BINDING: u32 = 4;
+        /// The G-buffer as the shading pass samples it: position + object, normal.
+        GBUFFER_POSITION_BINDING: u32 = 5;
+        GBUFFER_NORMAL_BINDING: u32 = 6;
+
+        /// A prefilter step's set 0: the cube (or, for step 1, the equirect) it reads as a texel
+        /// buffer, the cube it writes, and step 1's near-edge list (`NearHeader`, then texels).
+        PREFILTER_SOURCE_BINDING: u32 = 0;
+        PREFILTER_DEST_BINDING: u32 = 1;
+        NEAR_TEXELS_BINDING: u32 = 2;
+
+        /// brdf_eval.comp's set 0 (its Fresnel table is at `FRESNEL_KNOTS_BINDING`).
+        BRDF_EVAL_PARAMS_BINDING: u32 = 0;
+        BRDF_EVAL_DIRECTIONS_BINDING: u32 = 2;
+        BRDF_EVAL_VALUES_BINDING: u32 = 3;
+
+        /// mesh.vert's vertex attributes (`GpuMesh`'s interleaved vertex buffer).
+        VERTEX_POSITION_LOCATION: u32 = 0;
+        VERTEX_NORMAL_LOCATION: u32 = 1;
+
+        /// The values of the `background_kind` specialization constant: what pixels no mesh
+        /// covers show.
+        BACKGROUND_COLOR: u32 = 0;
+        BACKGROUND_ENVIRONMENT: u32 = 1;
+    }
+
+    specialization_constants {
+        /// The fragment shaders' specialization constants, one 32-bit value each; a field's
+        /// position is its `constant_id`, named `<FIELD>_ID` in the header.
+        struct DrawConstants {
+            /// K, the bound environment's layer count (`ENV_LAYER_COUNT`).
+            env_layer_count,
+            /// The G-buffer's samples per pixel (`SAMPLE_COUNT`).
+            sample_count,
+            /// `BACKGROUND_COLOR` or `BACKGROUND_ENVIRONMENT` (`BACKGROUND_KIND`).
+            background_kind,
+            /// Every Fresnel table of the draw has its knots on a power-of-two grid
+            /// (`FRESNEL_POW2_GRID`, a VkBool32).
+            fresnel_pow2_grid,
+        }
+    }
+
+    blocks {
+        /// One object's lacquer material (SPEC §2–4) as the shaders read it: `OBJECT_MATERIAL_TEXELS`
+        /// RGBA32F texels per object in the draw's material buffer, and a member of brdf_eval.comp's
+        /// uniform block. lacquer_brdf.glsl's `lacquer_params` is the one place that unpacks it.
+        struct ObjectMaterial: texels std140 {
+            /// Beckmann m of the lacquer's specular lobe.
+            beckmann_m: float,
+            /// a and b of the view factor f(nv) = a + b·nv, rounded to f32; the remainders are
+            /// `diffuse_a_lo` and `diffuse_b_lo` (the shader evaluates a + b·nv compensated).
+            diffuse_a: float,
+            diffuse_b: float,
+            /// g(r), evaluated on the host.
+            lacquer_g: float,
+            /// k_d.
+            albedo: vec3,
+            /// Knots in the object's Fresnel table (exact as a float: tables are short).
+            fresnel_count: float,
+            diffuse_a_lo: float,
+            diffuse_b_lo: float,
+            /// Index of the table's first knot among the draw's concatenated knots (exact as a
+            /// float below 2^24, which the renderer checks).
+            fresnel_first: float,
+            pad0: float,
+            /// SPEC §4's β(nv) = β_grazing + (β_normal − β_grazing)·nv^p.
+            beta_normal: float,
+            beta_grazing: float,
+            beta_power: float,
+            pad1: float,
+        }
+
+        /// brdf_eval.comp's uniform block.
+        struct BrdfEvalParams: std140 {
+            material: ObjectMaterial,
+            /// x: the number of direction triples.
+            row_count: uvec4,
+        }
+
+        /// What every object of a draw shares (frame.glsl's `frame`), std140.
+        struct Frame: std140 {
+            view_projection: mat4,
+            /// xyz: the camera position.
+            eye: vec4,
+            /// x: the number of lights.
+            light_count: ivec4,
+            /// w = 0: directional, xyz towards the light; w = 1: point, xyz its position.
+            light_vector: [vec4; MAX_LIGHTS],
+            /// rgb: irradiance E (directional) or intensity I (point).
+            light_color: [vec4; MAX_LIGHTS],
+            /// x: 1 if an environment lights the scene; y: its number of layers K.
+            environment: ivec4,
+            /// β_k, four per vec4.
+            layer_beta: [vec4; MAX_ENV_LAYERS / 4],
+            /// ln β_k for k ≥ 1 (0 where β_k ≤ 0): the shader interpolates layers linearly in ln β.
+            layer_log_beta: [vec4; MAX_ENV_LAYERS / 4],
+            /// The camera basis (world), for the background's primary rays; `camera_back` is the
+            /// negated view direction.
+            camera_right: vec4,
+            camera_up: vec4,
+            camera_back: vec4,
+            /// tan(fov/2), aspect W/H, width, height.
+            camera_params: vec4,
+            /// y: the image row of the render target's row 0 (tall images render in strips).
+            strip_offset: vec4,
+            /// x: object index + 1 in the G-buffer pass (0 elsewhere).
+            draw_info: ivec4,
+            /// The constant background (linear rgba; transparent is all 0).
+            background_color: vec4,
+        }
+
+        /// Step 1's push constants (equirect_to_cube*.comp).
+        struct EquirectToCubeParams: push_constant {
+            src_width: uint,
+            src_height: uint,
+            face_size: uint,
+            intensity: float,
+            /// cos ρ and sin ρ of the environment's rotation ρ about +Y.
+            rotation_cos: float,
+            rotation_sin: float,
+            /// S: each cube texel averages S × S sub-samples (`params::equirect_supersample`).
+            supersample: uint,
+        }
+
+        /// The head of step 1's near-edge list: how many texels it holds, then the near pass's
+        /// indirect dispatch (groups of `PREFILTER_WORKGROUP`² texels); the texel indices follow.
+        struct NearHeader: std430 {
+            count: uint,
+            dispatch_x: uint,
+            dispatch_y: uint,
+            dispatch_z: uint,
+        }
+
+        /// Step 2's push constants (downsample.comp).
+        struct DownsampleParams: push_constant {
+            /// The face size written (half the one read).
+            dst_face_size: uint,
+        }
+
+        /// Step 3's push constants (prefilter_layers.comp).
+        struct BlurLayerParams: push_constant {
+            face_size: uint,
+            beta: float,
+            /// `params::LOBE_CUTOFF`: texels with q > cutoff·β² are skipped.
+            cutoff: float,
+        }
+
+        /// Step 4's push constants (irradiance.comp).
+        struct IrradianceParams: push_constant {
+            face_size: uint,
+        }
+    }
+}

@@ -1,0 +1,276 @@
+//! The frame data: the one place that packs a draw's camera, lights, environment and the lacquer
+//! model (SPEC §2–4) into the blocks the interface declares (`Frame`, `ObjectMaterial`, the
+//! Fresnel knots), and the buffers they are written to. The compute BRDF evaluator packs its
+//! material here too, so a number the shader needs is packed once.
+//!
+//! To add a material field: declare it in `ObjectMaterial` (src/gpu/shaders/interface.rs; a pad
+//! field makes room without adding a texel), pack it in [`ObjectMaterial::new`] or
+//! [`ObjectMaterial::of_object`] here, and read it in lacquer_brdf.glsl's `lacquer_params`.
+
+use super::gpu_mesh::upload;
+use super::types::{DrawScene, RenderSettings};
+use crate::environment::gpu::GpuEnvironment;
+use crate::environment::params::ViewBlur;
+use crate::gpu::shaders::interface::{Frame, ObjectMaterial, MAX_ENV_LAYERS, MAX_LIGHTS};
+use crate::gpu::{Buffer, BufferUsage, GpuContext};
+use crate::model::{BrdfParams, FresnelTable};
+use crate::raster::camera::Camera;
+use crate::raster::lights::Light;
+use crate::Result;
+use bytemuck::Zeroable;
+
+/// A Fresnel table's knots as the shaders read them, one RGBA32F texel each:
+/// (angle_deg, r, g, b).
+pub(crate) fn fresnel_knots(table: &FresnelTable) -> Vec<[f32; 4]> {
+    table
+        .angles_deg()
+        .iter()
+        .zip(table.rgb())
+        .map(|(&angle, rgb)| [angle as f32, rgb[0] as f32, rgb[1] as f32, rgb[2] as f32])
+        .collect()
+}
+
+/// x ≈ hi + lo with hi = x rounded to f32 and lo the f32 nearest to the remainder.
+fn split_f64(x: f64) -> (f32, f32) {
+    let hi = x as f32;
+    (hi, (x - f64::from(hi)) as f32)
+}
+
+impl ObjectMaterial {
+    /// The BRDF of `brdf` with the Fresnel table `fresnel` as the only table (its first knot at
+    /// 0) and no view-dependent blur. a and b travel as f32 pairs (hi + lo) because the shader
+    /// evaluates a + b·nv in compensated arithmetic (see lacquer_brdf.glsl).
+    pub(crate) fn new(brdf: &BrdfParams, fresnel: &FresnelTable) -> Self {
+        let (diffuse_a, diffuse_a_lo) = split_f64(brdf.diffuse_a);
+        let (diffuse_b, diffuse_b_lo) = split_f64(brdf.diffuse_b);
+        ObjectMaterial {
+            beckmann_m: brdf.beckmann_m as f32,
+            diffuse_a,
+            diffuse_b,
+            lacquer_g: brdf.lacquer_g as f32,
+            albedo: brdf.albedo.map(|c| c as f32),
+            // Exact as f32: tables are far shorter than 2^24 knots.
+            fresnel_count: fresnel.angles_deg().len() as f32,
+            diffuse_a_lo,
+            diffuse_b_lo,
+            fresnel_first: 0.0,
+            ..ObjectMaterial::zeroed()
+        }
+    }
+
+    /// One object of a draw: its table starts at `first_knot` of the draw's concatenated knots,
+    /// and the environment is blurred by SPEC §4's β(nv) of `view_blur`.
+    pub(crate) fn of_object(
+        brdf: &BrdfParams,
+        fresnel: &FresnelTable,
+        first_knot: usize,
+        view_blur: &ViewBlur,
+    ) -> Self {
+        ObjectMaterial {
+            // Exact as f32: the renderer limits the knots of one draw to MAX_DRAW_KNOTS = 2^24.
+            fresnel_first: first_knot as f32,
+            beta_normal: view_blur.beta_normal as f32,
+            beta_grazing: view_blur.beta_grazing as f32,
+            beta_power: view_blur.beta_power as f32,
+            ..ObjectMaterial::new(brdf, fresnel)
+        }
+    }
+}
+
+/// The environment as a draw sees it: whether there is one and the β of each layer.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct EnvironmentUniforms {
+    pub enabled: bool,
+    pub layer_betas: Vec<f64>,
+}
+
+fn vec4(v: glam::DVec3, w: f32) -> [f32; 4] {
+    [v.x as f32, v.y as f32, v.z as f32, w]
+}
+
+impl Frame {
+    /// Packs one draw's camera, lights and environment. `lights.len()` must be ≤ MAX_LIGHTS
+    /// (checked by the renderer before this is called; extra lights are ignored here).
+    pub(crate) fn new(
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        scene_radius: f64,
+        lights: &[Light],
+        environment: &EnvironmentUniforms,
+    ) -> Self {
+        let (right, up, forward) = camera.basis();
+        let mut frame = Frame {
+            view_projection: camera
+                .view_projection(width, height, scene_radius)
+                .to_cols_array(),
+            eye: vec4(camera.eye, 1.0),
+            light_count: [lights.len().min(MAX_LIGHTS) as i32, 0, 0, 0],
+            environment: [
+                i32::from(environment.enabled),
+                environment.layer_betas.len().min(MAX_ENV_LAYERS) as i32,
+                0,
+                0,
+            ],
+            camera_right: vec4(right, 0.0),
+            camera_up: vec4(up, 0.0),
+            camera_back: vec4(-forward, 0.0),
+            camera_params: [
+                (0.5 * camera.fov_deg.to_radians()).tan() as f32,
+                (f64::from(width) / f64::from(height)) as f32,
+                width as f32,
+                height as f32,
+            ],
+            ..Frame::zeroed()
+        };
+        for (k, &beta) in environment
+            .layer_betas
+            .iter()
+            .take(MAX_ENV_LAYERS)
+            .enumerate()
+        {
+            frame.layer_beta[k / 4][k % 4] = beta as f32;
+            // Of the f32 β the shader compares against, so both describe the same layer.
+            let beta = f64::from(beta as f32);
+            frame.layer_log_beta[k / 4][k % 4] = if beta > 0.0 { beta.ln() as f32 } else { 0.0 };
+        }
+        for (i, light) in lights.iter().take(MAX_LIGHTS).enumerate() {
+            let (vector, color) = match *light {
+                Light::Directional {
+                    to_light,
+                    irradiance,
+                } => {
+                    let d = to_light.normalize();
+                    ([d.x, d.y, d.z, 0.0], irradiance)
+                }
+                Light::Point {
+                    position,
+                    intensity,
+                } => ([position.x, position.y, position.z, 1.0], intensity),
+            };
+            frame.light_vector[i] = vector.map(|v| v as f32);
+            frame.light_color[i] = vec4(color, 0.0);
+        }
+        frame
+    }
+}
+
+/// Fresnel knots the knot buffer holds before it must grow (the built-in tables have 91 each).
+const INITIAL_KNOTS: usize = 512;
+/// Objects the material buffer holds before it must grow.
+const INITIAL_OBJECTS: usize = 8;
+
+/// The buffers the frame data is written to, rewritten by every draw (the previous draw has
+/// finished: `submit_and_wait` waits on its fence before returning) and grown when a draw needs
+/// more.
+pub(super) struct DrawBuffers {
+    /// The shared frame of the background and shading passes.
+    pub scene_frame: Buffer,
+    /// Object i's frame for the G-buffer or forward pass (`draw_info.x` = i + 1).
+    pub object_frames: Vec<Buffer>,
+    /// Every object's Fresnel table, concatenated.
+    pub knots: Buffer,
+    /// Every object's [`ObjectMaterial`].
+    pub materials: Buffer,
+}
+
+impl DrawBuffers {
+    pub fn new(gpu: &GpuContext) -> Result<Self> {
+        Ok(DrawBuffers {
+            scene_frame: upload(
+                gpu,
+                "scene frame uniforms",
+                &[Frame::zeroed()],
+                BufferUsage::UNIFORM,
+            )?,
+            object_frames: Vec::new(),
+            knots: upload(
+                gpu,
+                "fresnel knots",
+                &[[0.0f32; 4]; INITIAL_KNOTS],
+                BufferUsage::UNIFORM_TEXEL,
+            )?,
+            materials: upload(
+                gpu,
+                "object materials",
+                &[ObjectMaterial::zeroed(); INITIAL_OBJECTS],
+                BufferUsage::UNIFORM_TEXEL,
+            )?,
+        })
+    }
+
+    /// Writes the frames (shared and per object), the materials and the Fresnel knots
+    /// (`object_knots[i]` of object i); returns the shared frame, whose strip offset the caller
+    /// sets per strip.
+    pub fn write(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &DrawScene<'_>,
+        settings: &RenderSettings,
+        environment: &GpuEnvironment,
+        (object_knots, scene_radius): (&[Vec<[f32; 4]>], f64),
+    ) -> Result<Frame> {
+        let mut frame = Frame::new(
+            scene.camera,
+            settings.width,
+            settings.height,
+            scene_radius,
+            scene.lights,
+            &EnvironmentUniforms {
+                enabled: scene.environment.is_some(),
+                layer_betas: environment.betas.clone(),
+            },
+        );
+        let mut knots: Vec<[f32; 4]> = Vec::new();
+        let mut materials: Vec<ObjectMaterial> = Vec::new();
+        for (i, (object, object_knots)) in scene.objects.iter().zip(object_knots).enumerate() {
+            let first_knot = knots.len();
+            knots.extend_from_slice(object_knots);
+            materials.push(ObjectMaterial::of_object(
+                object.brdf,
+                object.fresnel,
+                first_knot,
+                &object.view_blur,
+            ));
+            frame.draw_info = [i as i32 + 1, 0, 0, 0];
+            match self.object_frames.get_mut(i) {
+                Some(buffer) => buffer.write(std::slice::from_ref(&frame))?,
+                None => self.object_frames.push(upload(
+                    gpu,
+                    "object frame uniforms",
+                    std::slice::from_ref(&frame),
+                    BufferUsage::UNIFORM,
+                )?),
+            }
+        }
+        frame.draw_info = [0; 4];
+        frame.background_color = scene.background.clear_color();
+        self.scene_frame.write(std::slice::from_ref(&frame))?;
+        let texel = BufferUsage::UNIFORM_TEXEL;
+        write_growing(gpu, &mut self.knots, "fresnel knots", &knots, texel)?;
+        write_growing(
+            gpu,
+            &mut self.materials,
+            "object materials",
+            &materials,
+            texel,
+        )?;
+        Ok(frame)
+    }
+}
+
+/// Writes `data` into `buffer`, replacing it with one that fits when it is too small.
+fn write_growing<T: bytemuck::Pod>(
+    gpu: &GpuContext,
+    buffer: &mut Buffer,
+    name: &str,
+    data: &[T],
+    usage: BufferUsage,
+) -> Result<()> {
+    if buffer.size() < std::mem::size_of_val(data) as u64 {
+        *buffer = upload(gpu, name, data, usage)?;
+    } else {
+        buffer.write(data)?;
+    }
+    Ok(())
+}

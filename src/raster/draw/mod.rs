@@ -1,0 +1,428 @@
+//! The GPU draw: meshes shaded with the lacquer BRDF, lit by point/directional lights and the
+//! prefiltered environment, over a background (the sharp environment, a colour, or transparent),
+//! averaged over the MSAA samples and read back as an [`HdrImage`].
+//!
+//! The lacquer draw is deferred. Per draw, then per strip of image rows (one submit each):
+//!
+//! ```text
+//!  frame data      frame.rs: the Frame, every object's ObjectMaterial and Fresnel knots → buffers
+//!   ┌─ per strip ─────────────────────────────────────────────────────────────────────────────┐
+//!   │ G-buffer pass  gbuffer.frag: each covered sample keeps position, normal and object     │
+//!   │ shading pass   coverage.frag: coverage depth (+ the environment background)             │
+//!   │                shade.frag: each pixel's distinct surfaces shaded once, samples averaged │
+//!   │ copy-out       the strip's rows → the readback buffer → host                            │
+//!   └─────────────────────────────────────────────────────────────────────────────────────────┘
+//! ```
+//!
+//! That gives what forward shading and an MSAA resolve give, without llvmpipe shading whole 4×4
+//! blocks per small triangle and every hidden surface (BENCHMARKS.md). The benchmark's trivial
+//! shader ([`MeshShading::Trivial`]) is still drawn forward: it is the rasteriser's floor.
+//!
+//! The files: `types.rs` (what a caller passes and gets back, and its validation),
+//! `pipelines.rs` (the pipeline table, the descriptor-set layouts and sets), `frame.rs` (the
+//! frame data and its buffers), `passes.rs` (one function per pass), `targets.rs` (the render
+//! targets, drawn in strips) and `gpu_mesh.rs` (meshes on the device). To add a pass: a function
+//! in `passes.rs`, its pipeline kind in `pipelines.rs`, a line in the recipe below.
+//!
+//! Kept between draws: each pipeline, the sampler, the black stand-in environment, the render
+//! targets and readback buffer of the last size, and the frame-data buffers. Meshes are uploaded
+//! per draw by [`LacquerRenderer::render`]; callers that draw the same mesh again (the scene
+//! renderer) upload a [`GpuMesh`] once and use [`LacquerRenderer::render_meshes`].
+
+pub(crate) mod frame;
+pub mod gpu_mesh;
+mod passes;
+mod pipelines;
+mod targets;
+mod types;
+
+pub use gpu_mesh::GpuMesh;
+pub use types::{
+    Background, DrawObject, DrawOptions, DrawScene, DrawTimings, MeshShading, RenderSettings,
+    MAX_DRAW_KNOTS, SUPPORTED_SAMPLES,
+};
+
+use crate::environment::gpu::GpuEnvironment;
+use crate::environment::{CubeImage, PrefilteredEnvironment};
+use crate::gpu::shaders::interface::Frame;
+use crate::gpu::{Buffer, DescriptorSet, GpuContext, GraphicsPipeline, Sampler, TimestampPool};
+use crate::output::HdrImage;
+use crate::raster::camera::PixelRect;
+use crate::{Error, Result};
+use frame::{fresnel_knots, DrawBuffers};
+use passes::{
+    record_deferred, record_forward, strips, timings_from, DeferredPasses, DrawnMesh,
+    ForwardPasses, TIMESTAMPS,
+};
+use pipelines::{
+    fresnel_on_pow2_grid, graphics_set, shade_set, PipelineKey, PipelineKind, PipelineTable,
+    ShadeVariant,
+};
+use targets::TargetCache;
+use types::validate;
+
+/// The lacquer raster renderer; keeps its pipelines, targets and buffers between draws.
+#[derive(Default)]
+pub struct LacquerRenderer {
+    pipelines: PipelineTable,
+    targets: TargetCache,
+    /// Made by the first draw.
+    resources: Option<Resources>,
+}
+
+/// What a renderer makes on its first draw and keeps.
+struct Resources {
+    sampler: Sampler,
+    buffers: DrawBuffers,
+    /// Bound when a draw has no environment (every binding the shaders declare must hold a valid
+    /// descriptor); made by the first such draw.
+    black_environment: Option<GpuEnvironment>,
+    /// Made by the first timed draw.
+    timestamps: Option<TimestampPool>,
+}
+
+impl Resources {
+    fn new(gpu: &GpuContext) -> Result<Self> {
+        Ok(Resources {
+            sampler: gpu.create_sampler()?,
+            buffers: DrawBuffers::new(gpu)?,
+            black_environment: None,
+            timestamps: None,
+        })
+    }
+}
+
+/// The value in `slot`, made by `make` first if there is none.
+pub(crate) fn get_or_try_insert<T>(
+    slot: &mut Option<T>,
+    make: impl FnOnce() -> Result<T>,
+) -> Result<&mut T> {
+    match slot {
+        Some(value) => Ok(value),
+        None => Ok(slot.insert(make()?)),
+    }
+}
+
+impl LacquerRenderer {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Tests draw small images in many strips with a tiny colour-target budget.
+    #[cfg(test)]
+    pub(crate) fn set_color_target_budget(&mut self, bytes: u64) {
+        self.targets.color_budget = bytes;
+    }
+
+    /// Renders `scene` and reads the image back (linear radiance, alpha = coverage, row 0 top).
+    /// Uploads each object's mesh for this draw.
+    pub fn render(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &DrawScene<'_>,
+        settings: &RenderSettings,
+    ) -> Result<HdrImage> {
+        validate(gpu, scene, settings)?;
+        let meshes: Vec<GpuMesh> = scene
+            .objects
+            .iter()
+            .map(|o| GpuMesh::upload(gpu, o.mesh))
+            .collect::<Result<_>>()?;
+        let meshes: Vec<&GpuMesh> = meshes.iter().collect();
+        let (image, _) = self.draw(gpu, scene, &meshes, settings, DrawOptions::default())?;
+        Ok(image)
+    }
+
+    /// [`render`](Self::render) with each object's mesh already on the device: `meshes[i]` must
+    /// be the upload of `scene.objects[i].mesh`. Returns the pass timings with `options.timed`.
+    pub fn render_meshes(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &DrawScene<'_>,
+        meshes: &[&GpuMesh],
+        settings: &RenderSettings,
+        options: DrawOptions,
+    ) -> Result<(HdrImage, Option<DrawTimings>)> {
+        validate(gpu, scene, settings)?;
+        if meshes.len() != scene.objects.len() {
+            return Err(Error::invalid(
+                "meshes",
+                meshes.len(),
+                format!("one GPU mesh per object ({} objects)", scene.objects.len()),
+            ));
+        }
+        self.draw(gpu, scene, meshes, settings, options)
+    }
+
+    /// The recipe: the frame data, then the passes of `options.shading`, strip by strip.
+    fn draw(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &DrawScene<'_>,
+        meshes: &[&GpuMesh],
+        settings: &RenderSettings,
+        options: DrawOptions,
+    ) -> Result<(HdrImage, Option<DrawTimings>)> {
+        let Resources {
+            sampler,
+            buffers,
+            black_environment,
+            timestamps,
+        } = get_or_try_insert(&mut self.resources, || Resources::new(gpu))?;
+        let environment = match scene.environment {
+            Some(environment) => environment,
+            None => &*get_or_try_insert(black_environment, || upload_black_environment(gpu))?,
+        };
+        let stamps = match options.timed {
+            true => Some(&*get_or_try_insert(timestamps, || {
+                Ok(gpu.create_timestamp_pool(TIMESTAMPS)?)
+            })?),
+            false => None,
+        };
+        // Once per draw, for the knot buffer, the pipeline choice and the screen bounds.
+        let knots: Vec<Vec<[f32; 4]>> = scene
+            .objects
+            .iter()
+            .map(|o| fresnel_knots(o.fresnel))
+            .collect();
+        let scene_radius = scene
+            .objects
+            .iter()
+            .map(|o| o.mesh.bounding_radius())
+            .fold(0.0, f64::max);
+        let frame = buffers.write(gpu, scene, settings, environment, (&knots, scene_radius))?;
+        let inputs = DrawInputs {
+            gpu,
+            scene,
+            meshes,
+            settings,
+            environment,
+            sampler,
+            stamps,
+            scene_radius,
+        };
+        let (pipelines, targets) = (&mut self.pipelines, &mut self.targets);
+        match options.shading {
+            MeshShading::Lacquer => {
+                let pow2_grid = knots.iter().all(|k| fresnel_on_pow2_grid(k));
+                draw_deferred(&inputs, pipelines, targets, buffers, frame, pow2_grid)
+            }
+            MeshShading::Trivial => draw_forward(&inputs, pipelines, targets, buffers, frame),
+        }
+    }
+}
+
+/// What every pass of one draw reads.
+struct DrawInputs<'a> {
+    gpu: &'a GpuContext,
+    scene: &'a DrawScene<'a>,
+    meshes: &'a [&'a GpuMesh],
+    settings: &'a RenderSettings,
+    /// The scene's environment, or the black one.
+    environment: &'a GpuEnvironment,
+    sampler: &'a Sampler,
+    stamps: Option<&'a TimestampPool>,
+    scene_radius: f64,
+}
+
+impl DrawInputs<'_> {
+    fn key(&self, kind: PipelineKind) -> PipelineKey {
+        PipelineKey {
+            kind,
+            samples: self.settings.samples,
+            layer_count: self.environment.layers.len() as u32,
+        }
+    }
+
+    fn target_size(&self) -> (u32, u32, u32) {
+        let s = self.settings;
+        (s.width, s.height, s.samples)
+    }
+
+    /// Each object's set for the mesh pass: its frame and the environment.
+    fn object_sets(
+        &self,
+        pipeline: &GraphicsPipeline,
+        buffers: &DrawBuffers,
+    ) -> Result<Vec<DescriptorSet>> {
+        buffers.object_frames[..self.meshes.len()]
+            .iter()
+            .map(|frame| graphics_set(self.gpu, pipeline, frame, self.environment, self.sampler))
+            .collect()
+    }
+
+    /// Adds one strip's timestamps to `sum` (timed draws only).
+    fn add_strip_timings(&self, sum: &mut Option<DrawTimings>) -> Result<()> {
+        if let (Some(pool), Some(sum)) = (self.stamps, sum.as_mut()) {
+            *sum += timings_from(&pool.read_ns(TIMESTAMPS)?);
+        }
+        Ok(())
+    }
+}
+
+/// The lacquer draw: per strip, the G-buffer pass, the shading pass and the copy-out.
+fn draw_deferred(
+    inputs: &DrawInputs<'_>,
+    pipelines: &mut PipelineTable,
+    targets: &mut TargetCache,
+    buffers: &mut DrawBuffers,
+    mut frame: Frame,
+    fresnel_pow2_grid: bool,
+) -> Result<(HdrImage, Option<DrawTimings>)> {
+    let DrawInputs { gpu, scene, .. } = *inputs;
+    let environment_background = scene.background == Background::Environment;
+    let gbuffer = pipelines.get(gpu, inputs.key(PipelineKind::GBuffer))?;
+    let coverage = pipelines.get(
+        gpu,
+        inputs.key(PipelineKind::Coverage(environment_background)),
+    )?;
+    let shade = pipelines.get(
+        gpu,
+        inputs.key(PipelineKind::Shade(ShadeVariant {
+            environment_background,
+            fresnel_pow2_grid,
+        })),
+    )?;
+    let object_sets = inputs.object_sets(&gbuffer, buffers)?;
+    let objects: Vec<DrawnMesh<'_>> = inputs.meshes.iter().copied().zip(&object_sets).collect();
+    let targets = targets.deferred(gpu, inputs.target_size())?;
+    let gbuffer_images = (&targets.attachments.position, &targets.attachments.normal);
+    let shade_set = shade_set(
+        gpu,
+        &shade,
+        buffers,
+        inputs.environment,
+        inputs.sampler,
+        gbuffer_images,
+    )?;
+    let passes = DeferredPasses {
+        gbuffer: &gbuffer,
+        objects: &objects,
+        coverage: &coverage,
+        shade: &shade,
+        shade_set: &shade_set,
+        shaded: screen_bounds(inputs),
+        // The environment background is drawn by the coverage pass.
+        coverage_everywhere: environment_background,
+        clear_color: scene.background.clear_color(),
+    };
+    let settings = inputs.settings;
+    let mut timings = inputs.stamps.map(|_| DrawTimings::default());
+    for strip in strips(settings.width, settings.height, targets.strip_rows) {
+        // The previous strip's submit has finished (submit_and_wait), so the frame can be
+        // rewritten for this one.
+        frame.strip_offset[1] = strip.first_row as f32;
+        buffers.scene_frame.write(std::slice::from_ref(&frame))?;
+        record_deferred(gpu, targets, &passes, strip, inputs.stamps)?;
+        targets.used = true;
+        inputs.add_strip_timings(&mut timings)?;
+    }
+    read_back(&targets.readback, settings, timings)
+}
+
+/// The forward draw (the benchmark's trivial shader): per strip, the background and the meshes
+/// with an MSAA resolve, and the copy-out.
+fn draw_forward(
+    inputs: &DrawInputs<'_>,
+    pipelines: &mut PipelineTable,
+    targets: &mut TargetCache,
+    buffers: &mut DrawBuffers,
+    mut frame: Frame,
+) -> Result<(HdrImage, Option<DrawTimings>)> {
+    let DrawInputs { gpu, scene, .. } = *inputs;
+    let mesh = pipelines.get(gpu, inputs.key(PipelineKind::Trivial))?;
+    let with_background = scene.background == Background::Environment;
+    let background = match with_background {
+        true => {
+            let pipeline = pipelines.get(gpu, inputs.key(PipelineKind::Background))?;
+            let frame = &buffers.scene_frame;
+            let set = graphics_set(gpu, &pipeline, frame, inputs.environment, inputs.sampler)?;
+            Some((pipeline, set))
+        }
+        false => None,
+    };
+    let object_sets = inputs.object_sets(&mesh, buffers)?;
+    let objects: Vec<DrawnMesh<'_>> = inputs.meshes.iter().copied().zip(&object_sets).collect();
+    let targets = targets.forward(gpu, inputs.target_size())?;
+    let passes = ForwardPasses {
+        background: background.as_ref().map(|(p, set)| (&**p, set)),
+        mesh: &mesh,
+        objects: &objects,
+        clear_color: scene.background.clear_color(),
+    };
+    let settings = inputs.settings;
+    let mut timings = inputs.stamps.map(|_| DrawTimings::default());
+    for strip in strips(settings.width, settings.height, targets.strip_rows) {
+        if with_background {
+            // As in the deferred draw: the previous strip has finished.
+            frame.strip_offset[1] = strip.first_row as f32;
+            buffers.scene_frame.write(std::slice::from_ref(&frame))?;
+        }
+        record_forward(gpu, targets, &passes, strip, inputs.stamps)?;
+        targets.used = true;
+        inputs.add_strip_timings(&mut timings)?;
+    }
+    read_back(&targets.readback, settings, timings)
+}
+
+fn read_back(
+    readback: &Buffer,
+    settings: &RenderSettings,
+    timings: Option<DrawTimings>,
+) -> Result<(HdrImage, Option<DrawTimings>)> {
+    let image = HdrImage {
+        width: settings.width,
+        height: settings.height,
+        pixels: readback.read()?,
+    };
+    Ok((image, timings))
+}
+
+/// The stand-in for a draw without an environment: black, uploaded rather than prefiltered, so
+/// a context that never sees an environment builds no prefilter pipelines.
+fn upload_black_environment(gpu: &GpuContext) -> Result<GpuEnvironment> {
+    let face = crate::environment::params::MIN_LAYER_FACE;
+    let black = || CubeImage {
+        face_size: face,
+        texels: vec![[0.0, 0.0, 0.0, 1.0]; 6 * (face as usize).pow(2)],
+    };
+    let env = PrefilteredEnvironment {
+        betas: vec![0.0, 1.0],
+        layers: vec![black(), black()],
+        irradiance: black(),
+    };
+    GpuEnvironment::upload(gpu, &env)
+}
+
+/// The pixels any object can cover (the union of their boxes' screen bounds); empty without
+/// objects.
+fn screen_bounds(inputs: &DrawInputs<'_>) -> PixelRect {
+    let (scene, settings) = (inputs.scene, inputs.settings);
+    let mut union: Option<PixelRect> = None;
+    for object in scene.objects {
+        let Some(bounds) = object.mesh.bounding_box() else {
+            continue;
+        };
+        let r = scene.camera.screen_bounds(
+            bounds,
+            settings.width,
+            settings.height,
+            inputs.scene_radius,
+        );
+        union = Some(match union {
+            None => r,
+            Some(u) => PixelRect {
+                x0: u.x0.min(r.x0),
+                y0: u.y0.min(r.y0),
+                x1: u.x1.max(r.x1),
+                y1: u.y1.max(r.y1),
+            },
+        });
+    }
+    union.unwrap_or(PixelRect {
+        x0: 0,
+        y0: 0,
+        x1: 0,
+        y1: 0,
+    })
+}

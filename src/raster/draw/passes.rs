@@ -1,0 +1,358 @@
+//! The passes of one strip of a draw, one function each, recorded into one submit:
+//!
+//! - the lacquer draw (deferred): barriers → [`gbuffer_pass`] → [`shading_pass`] (its
+//!   [`coverage_draw`], then its [`shade_draw`]) → [`copy_out`];
+//! - the forward draw (the benchmark's trivial shader): barriers → [`forward_pass`] (background,
+//!   meshes, MSAA resolve) → [`copy_out`];
+//!
+//! with a timestamp before and after the drawing and after the copy.
+
+use super::gpu_mesh::GpuMesh;
+use super::targets::{Deferred, DrawTargets, Forward};
+use super::types::DrawTimings;
+use crate::gpu::{
+    Access, Buffer, DescriptorSet, GpuContext, GraphicsPipeline, Image, ImageUse, Layout, Recorder,
+    RenderTargets, TimestampPool,
+};
+use crate::raster::camera::PixelRect;
+use crate::Result;
+
+/// Timestamps: start, before the pass, after the pass (and the shading), after the copy. None
+/// inside the pass: on llvmpipe a timestamp there ends the binned scene, so the pass after it
+/// reloads the multisampled targets and a timed draw would cost more than an untimed one.
+pub(crate) const TIMESTAMPS: u32 = 4;
+
+/// The image rows one submit draws: `rows` rows from `first_row` of an image of the given size.
+#[derive(Clone, Copy)]
+pub(crate) struct Strip {
+    pub first_row: u32,
+    pub rows: u32,
+    pub image_width: u32,
+    pub image_height: u32,
+}
+
+/// The strips of an image `width` × `height` drawn `strip_rows` rows at a time, top first.
+pub(crate) fn strips(width: u32, height: u32, strip_rows: u32) -> impl Iterator<Item = Strip> {
+    (0..height)
+        .step_by(strip_rows as usize)
+        .map(move |first_row| Strip {
+            first_row,
+            rows: strip_rows.min(height - first_row),
+            image_width: width,
+            image_height: height,
+        })
+}
+
+/// One mesh and its descriptor set (its frame and the environment).
+pub(crate) type DrawnMesh<'a> = (&'a GpuMesh, &'a DescriptorSet);
+
+/// What the lacquer draw's passes draw with, the same for every strip.
+pub(crate) struct DeferredPasses<'a> {
+    pub gbuffer: &'a GraphicsPipeline,
+    pub objects: &'a [DrawnMesh<'a>],
+    /// coverage.frag and shade.frag, sharing one descriptor set.
+    pub coverage: &'a GraphicsPipeline,
+    pub shade: &'a GraphicsPipeline,
+    pub shade_set: &'a DescriptorSet,
+    /// Image pixels that may be covered (the meshes' screen bounds): the shading pass touches
+    /// only these, the rest keep the clear colour.
+    pub shaded: PixelRect,
+    /// Whether the coverage draw fills every pixel (it draws the environment background), not
+    /// only `shaded`.
+    pub coverage_everywhere: bool,
+    pub clear_color: [f32; 4],
+}
+
+/// What the forward draw's pass draws with, the same for every strip.
+pub(crate) struct ForwardPasses<'a> {
+    pub background: Option<(&'a GraphicsPipeline, &'a DescriptorSet)>,
+    pub mesh: &'a GraphicsPipeline,
+    pub objects: &'a [DrawnMesh<'a>],
+    pub clear_color: [f32; 4],
+}
+
+const COLOR_ATTACHMENT: ImageUse =
+    ImageUse::new(Access::ColorAttachmentWrite, Layout::ColorAttachment);
+const DEPTH_ATTACHMENT: ImageUse =
+    ImageUse::new(Access::DepthAttachmentWrite, Layout::DepthAttachment);
+const SHADER_READ: ImageUse = ImageUse::new(Access::GraphicsShaderRead, Layout::ShaderRead);
+
+fn discard(access: Access) -> ImageUse {
+    ImageUse::new(access, Layout::Undefined)
+}
+
+/// Records and submits one strip of the lacquer draw, and waits for it.
+pub(crate) fn record_deferred(
+    gpu: &GpuContext,
+    targets: &DrawTargets<Deferred>,
+    passes: &DeferredPasses<'_>,
+    strip: Strip,
+    stamps: Option<&TimestampPool>,
+) -> Result<()> {
+    gpu.submit_and_wait(|rec| {
+        mark(rec, stamps, 0);
+        deferred_barriers(rec, targets);
+        mark(rec, stamps, 1);
+        gbuffer_pass(rec, targets, passes, strip);
+        shading_pass(rec, targets, passes, strip);
+        mark(rec, stamps, 2);
+        copy_out(rec, &targets.attachments.output, &targets.readback, strip);
+        mark(rec, stamps, 3);
+        Ok(())
+    })?;
+    Ok(())
+}
+
+/// Records and submits one strip of the forward draw, and waits for it.
+pub(crate) fn record_forward(
+    gpu: &GpuContext,
+    targets: &DrawTargets<Forward>,
+    passes: &ForwardPasses<'_>,
+    strip: Strip,
+    stamps: Option<&TimestampPool>,
+) -> Result<()> {
+    gpu.submit_and_wait(|rec| {
+        mark(rec, stamps, 0);
+        forward_barriers(rec, targets);
+        mark(rec, stamps, 1);
+        forward_pass(rec, targets, passes, strip);
+        mark(rec, stamps, 2);
+        let output = targets.attachments.resolve.as_ref();
+        let output = output.unwrap_or(&targets.attachments.color);
+        copy_out(rec, output, &targets.readback, strip);
+        mark(rec, stamps, 3);
+        Ok(())
+    })?;
+    Ok(())
+}
+
+fn mark(rec: &mut Recorder<'_>, stamps: Option<&TimestampPool>, index: u32) {
+    if let Some(pool) = stamps {
+        if index == 0 {
+            rec.reset_timestamps(pool);
+        }
+        rec.timestamp(pool, index);
+    }
+}
+
+/// The whole image's viewport, moved up so the target holds this strip's rows: every pixel keeps
+/// the position (and sample positions) it has in an undivided draw.
+fn set_strip_viewport(rec: &mut Recorder<'_>, strip: Strip) {
+    rec.set_viewport(
+        0.0,
+        -(strip.first_row as f32),
+        strip.image_width as f32,
+        strip.image_height as f32,
+    );
+}
+
+fn draw_objects(rec: &mut Recorder<'_>, pipeline: &GraphicsPipeline, objects: &[DrawnMesh<'_>]) {
+    for (mesh, set) in objects {
+        rec.bind_graphics(pipeline, set);
+        rec.bind_mesh_buffers(&mesh.vertices, &mesh.indices);
+        rec.draw_indexed(mesh.index_count);
+    }
+}
+
+/// First use: nothing to wait for. Reuse: the previous strip's or draw's shading pass read the
+/// G-buffer, its depth tests wrote both depth targets and its copy read the output and wrote the
+/// readback buffer.
+fn deferred_barriers(rec: &mut Recorder<'_>, targets: &DrawTargets<Deferred>) {
+    let (gbuffer_before, depth_before, output_before) = if targets.used {
+        (
+            Access::GraphicsShaderRead,
+            Access::DepthAttachmentWrite,
+            Access::TransferRead,
+        )
+    } else {
+        (Access::Nothing, Access::Nothing, Access::Nothing)
+    };
+    let images = &targets.attachments;
+    for image in [&images.position, &images.normal] {
+        rec.image_barrier(image, discard(gbuffer_before), COLOR_ATTACHMENT);
+    }
+    for depth in [&targets.depth, &images.coverage] {
+        rec.image_barrier(depth, discard(depth_before), DEPTH_ATTACHMENT);
+    }
+    rec.image_barrier(&images.output, discard(output_before), COLOR_ATTACHMENT);
+    if targets.used {
+        rec.memory_barrier(Access::TransferWrite, Access::TransferWrite);
+    }
+}
+
+/// The G-buffer pass (gbuffer.frag): each covered sample keeps its interpolated position and
+/// normal and its object; then the G-buffer becomes readable by the shading pass.
+fn gbuffer_pass(
+    rec: &mut Recorder<'_>,
+    targets: &DrawTargets<Deferred>,
+    passes: &DeferredPasses<'_>,
+    strip: Strip,
+) {
+    let gbuffer = [&targets.attachments.position, &targets.attachments.normal];
+    rec.begin_rendering(&RenderTargets {
+        colors: &gbuffer,
+        // Both cleared: the shading pass compares every sample's normal (both sides of a branch
+        // run: quirk `loop_body_runs_when_no_lane_enters`), and a comparison with uncleared
+        // memory is a use of uninitialised values, which valgrind reports in the C API tests.
+        cleared_colors: 2,
+        resolve: None,
+        depth: Some(&targets.depth),
+        // w = 0: no object covers the sample.
+        clear_color: [0.0; 4],
+    });
+    set_strip_viewport(rec, strip);
+    draw_objects(rec, passes.gbuffer, passes.objects);
+    rec.end_rendering();
+    for image in gbuffer {
+        rec.image_barrier(image, COLOR_ATTACHMENT, SHADER_READ);
+    }
+}
+
+/// The shading pass, single-sampled: the coverage draw, then the shade draw behind its early
+/// depth test, both scissored to the strip's part of the meshes' screen bounds (the coverage draw
+/// unscissored when it draws the environment background everywhere).
+fn shading_pass(
+    rec: &mut Recorder<'_>,
+    targets: &DrawTargets<Deferred>,
+    passes: &DeferredPasses<'_>,
+    strip: Strip,
+) {
+    rec.begin_rendering(&RenderTargets {
+        colors: &[&targets.attachments.output],
+        cleared_colors: 1,
+        resolve: None,
+        depth: Some(&targets.attachments.coverage),
+        // The background where it is a colour (or transparent); coverage.frag draws the
+        // environment one.
+        clear_color: passes.clear_color,
+    });
+    set_strip_viewport(rec, strip);
+    if passes.coverage_everywhere {
+        coverage_draw(rec, passes);
+    }
+    if let Some((x, y, width, height)) = shaded_in_strip(passes.shaded, strip) {
+        rec.set_scissor(x, y, width, height);
+        if !passes.coverage_everywhere {
+            coverage_draw(rec, passes);
+        }
+        shade_draw(rec, passes);
+    }
+    rec.end_rendering();
+}
+
+/// `shaded` in the strip's target rows (the target holds image rows `first_row..`) as a scissor
+/// (x, y, width, height); None where the strip holds none of it.
+fn shaded_in_strip(shaded: PixelRect, strip: Strip) -> Option<(u32, u32, u32, u32)> {
+    let rows = (
+        shaded.y0.max(strip.first_row),
+        shaded.y1.min(strip.first_row + strip.rows),
+    );
+    (rows.0 < rows.1 && !shaded.is_empty()).then(|| {
+        (
+            shaded.x0,
+            rows.0 - strip.first_row,
+            shaded.x1 - shaded.x0,
+            rows.1 - rows.0,
+        )
+    })
+}
+
+/// coverage.frag: writes 0 (covered) or 1 (the clear value, passing as equal so the background
+/// is written too) into the coverage depth.
+fn coverage_draw(rec: &mut Recorder<'_>, passes: &DeferredPasses<'_>) {
+    rec.bind_graphics(passes.coverage, passes.shade_set);
+    rec.draw(3);
+}
+
+/// shade.frag: 1 > 0 passes where a sample is covered; early, so uncovered blocks are skipped.
+fn shade_draw(rec: &mut Recorder<'_>, passes: &DeferredPasses<'_>) {
+    rec.bind_graphics(passes.shade, passes.shade_set);
+    rec.draw(3);
+}
+
+/// The strip's single-sampled image to its rows of the readback buffer, visible to the host.
+fn copy_out(rec: &mut Recorder<'_>, image: &Image, readback: &Buffer, strip: Strip) {
+    rec.image_barrier(
+        image,
+        COLOR_ATTACHMENT,
+        ImageUse::new(Access::TransferRead, Layout::TransferSrc),
+    );
+    let row_bytes = u64::from(strip.image_width) * 16;
+    rec.copy_image_rows_to_buffer(
+        image,
+        strip.rows,
+        readback,
+        u64::from(strip.first_row) * row_bytes,
+    );
+    rec.memory_barrier(Access::TransferWrite, Access::HostRead);
+}
+
+/// First use: nothing to wait for. Reuse: the previous draw's last access to each target.
+fn forward_barriers(rec: &mut Recorder<'_>, targets: &DrawTargets<Forward>) {
+    let (color_before, output_before, depth_before, readback_before) = if targets.used {
+        (
+            Access::ColorAttachmentWrite,
+            Access::TransferRead,
+            Access::DepthAttachmentWrite,
+            Access::TransferWrite,
+        )
+    } else {
+        (
+            Access::Nothing,
+            Access::Nothing,
+            Access::Nothing,
+            Access::Nothing,
+        )
+    };
+    let Forward { color, resolve } = &targets.attachments;
+    match resolve {
+        Some(resolve) => {
+            // The MSAA samples were last written as an attachment; the resolve image was
+            // last read by the copy.
+            rec.image_barrier(color, discard(color_before), COLOR_ATTACHMENT);
+            rec.image_barrier(resolve, discard(output_before), COLOR_ATTACHMENT);
+        }
+        None => rec.image_barrier(color, discard(output_before), COLOR_ATTACHMENT),
+    }
+    rec.image_barrier(&targets.depth, discard(depth_before), DEPTH_ATTACHMENT);
+    if targets.used {
+        // The previous copy-out wrote the readback buffer; this one writes it again.
+        rec.memory_barrier(readback_before, Access::TransferWrite);
+    }
+}
+
+/// The forward pass: the background (if any), then the meshes, resolved from MSAA at its end.
+fn forward_pass(
+    rec: &mut Recorder<'_>,
+    targets: &DrawTargets<Forward>,
+    passes: &ForwardPasses<'_>,
+    strip: Strip,
+) {
+    rec.begin_rendering(&RenderTargets {
+        colors: &[&targets.attachments.color],
+        cleared_colors: 1,
+        resolve: targets.attachments.resolve.as_ref(),
+        depth: Some(&targets.depth),
+        clear_color: passes.clear_color,
+    });
+    set_strip_viewport(rec, strip);
+    if let Some((pipeline, set)) = passes.background {
+        rec.bind_graphics(pipeline, set);
+        rec.draw(3);
+    }
+    draw_objects(rec, passes.mesh, passes.objects);
+    rec.end_rendering();
+}
+
+/// The timings of one strip from its timestamps (ns).
+pub(crate) fn timings_from(ns: &[f64]) -> DrawTimings {
+    let span = |a: usize, b: usize| match (ns.get(a), ns.get(b)) {
+        (Some(x), Some(y)) => (y - x).max(0.0) * 1e-9,
+        _ => 0.0,
+    };
+    DrawTimings {
+        pass: span(1, 2),
+        copy_out: span(2, 3),
+        total: span(0, 3),
+    }
+}

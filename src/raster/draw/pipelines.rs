@@ -1,0 +1,356 @@
+//! The pipeline table: every graphics pipeline the draws use, keyed by kind, sample count and the
+//! environment's layer count, each built on first use (a command builds only the ones it draws
+//! with) and kept; the descriptor-set layouts they declare, and the descriptor sets of one draw.
+
+use super::frame::DrawBuffers;
+use super::gpu_mesh::{VERTEX_ATTRIBUTES, VERTEX_STRIDE};
+use crate::environment::gpu::GpuEnvironment;
+use crate::gpu::shaders::interface::{
+    DrawConstants, BACKGROUND_COLOR, BACKGROUND_ENVIRONMENT, ENV_IRRADIANCE_BINDING,
+    ENV_LAYERS_BINDING, FRAME_BINDING, FRESNEL_KNOTS_BINDING, GBUFFER_NORMAL_BINDING,
+    GBUFFER_POSITION_BINDING, MAX_ENV_LAYERS, OBJECT_MATERIAL_BINDING,
+};
+use crate::gpu::{
+    Binding, BindingKind, Buffer, DepthCompare, DepthTest, DescriptorSet, Format, GpuContext,
+    GraphicsPipeline, GraphicsPipelineDesc, Image, Resource, Sampler,
+};
+use crate::Result;
+use std::collections::hash_map::Entry;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// The mesh and background passes' set: the frame and the environment (background.frag samples
+/// it).
+const GRAPHICS_BINDINGS: [Binding; 3] = [
+    Binding::new(FRAME_BINDING, BindingKind::UniformBuffer),
+    Binding::array(
+        ENV_LAYERS_BINDING,
+        BindingKind::SampledImage,
+        MAX_ENV_LAYERS as u32,
+    ),
+    Binding::new(ENV_IRRADIANCE_BINDING, BindingKind::SampledImage),
+];
+
+/// The shading pass's set (coverage_body.glsl, shade_body.glsl): the frame, the Fresnel knots,
+/// the environment, the materials and the G-buffer.
+const SHADE_BINDINGS: [Binding; 7] = [
+    Binding::new(FRAME_BINDING, BindingKind::UniformBuffer),
+    Binding::new(FRESNEL_KNOTS_BINDING, BindingKind::UniformTexelBuffer),
+    Binding::array(
+        ENV_LAYERS_BINDING,
+        BindingKind::SampledImage,
+        MAX_ENV_LAYERS as u32,
+    ),
+    Binding::new(ENV_IRRADIANCE_BINDING, BindingKind::SampledImage),
+    Binding::new(OBJECT_MATERIAL_BINDING, BindingKind::UniformTexelBuffer),
+    Binding::new(GBUFFER_POSITION_BINDING, BindingKind::SampledImage),
+    Binding::new(GBUFFER_NORMAL_BINDING, BindingKind::SampledImage),
+];
+
+/// The specialization constants of a shading pipeline that depend on the draw.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub(super) struct ShadeVariant {
+    /// The environment (else a colour) fills uncovered samples.
+    pub environment_background: bool,
+    /// See [`fresnel_on_pow2_grid`].
+    pub fresnel_pow2_grid: bool,
+}
+
+/// Whether a table's knots (as the shader reads them, f32) lie at exactly i·step degrees from 0
+/// with step a power of two, so that θ/step is exact and its integer part is the interval the
+/// shader's search would find. The built-in tables (a knot per degree) do.
+pub(super) fn fresnel_on_pow2_grid(knots: &[[f32; 4]]) -> bool {
+    let step = match knots {
+        [first, second, ..] if first[0] == 0.0 => second[0] - first[0],
+        _ => return false,
+    };
+    let power_of_two = step.is_normal() && step > 0.0 && step.to_bits() & 0x007f_ffff == 0;
+    power_of_two
+        && knots
+            .iter()
+            .enumerate()
+            .all(|(i, knot)| i < (1 << 24) && knot[0] == i as f32 * step)
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(super) enum PipelineKind {
+    /// The lacquer draw's geometry pass (gbuffer.frag), multisampled.
+    GBuffer,
+    /// The shading pass's first draw (coverage_body.glsl), single-sampled, reading a G-buffer
+    /// of the key's sample count. `true`: the environment is the background (then it writes
+    /// colour).
+    Coverage(bool),
+    /// The shading pass's second draw (shade_body.glsl); keyed like Coverage.
+    Shade(ShadeVariant),
+    /// The benchmark's forward draw (trivial.frag).
+    Trivial,
+    /// The background of a forward draw.
+    Background,
+}
+
+/// One pipeline of the table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(super) struct PipelineKey {
+    pub kind: PipelineKind,
+    /// The G-buffer's (or the forward target's) MSAA samples.
+    pub samples: u32,
+    /// K of the bound environment: a specialization constant.
+    pub layer_count: u32,
+}
+
+impl PipelineKey {
+    fn constants(&self) -> DrawConstants {
+        let variant = match self.kind {
+            PipelineKind::Shade(variant) => variant,
+            PipelineKind::Coverage(environment_background) => ShadeVariant {
+                environment_background,
+                fresnel_pow2_grid: false,
+            },
+            _ => ShadeVariant::default(),
+        };
+        DrawConstants {
+            env_layer_count: self.layer_count,
+            sample_count: self.samples,
+            background_kind: match variant.environment_background {
+                true => BACKGROUND_ENVIRONMENT,
+                false => BACKGROUND_COLOR,
+            },
+            fresnel_pow2_grid: u32::from(variant.fresnel_pow2_grid),
+        }
+    }
+
+    /// How the pipeline is built.
+    fn desc<'a>(&self, constants: &'a DrawConstants) -> GraphicsPipelineDesc<'a> {
+        use crate::gpu::shaders::*;
+        let multisampled = self.samples > 1;
+        match self.kind {
+            PipelineKind::GBuffer => {
+                self.mesh("gbuffer", GBUFFER_FRAG, &GBUFFER_FORMATS, constants)
+            }
+            PipelineKind::Trivial => self.mesh("trivial", TRIVIAL_FRAG, &COLOR_FORMAT, constants),
+            // Writes 0 (covered) or 1 (the clear value, passing as equal so the background colour
+            // is written too) into the coverage depth.
+            PipelineKind::Coverage(_) => self.full_screen(
+                "coverage",
+                if multisampled {
+                    COVERAGE_MS_FRAG
+                } else {
+                    COVERAGE_FRAG
+                },
+                (&SHADE_BINDINGS, 1),
+                Some(DepthTest {
+                    compare: DepthCompare::LessOrEqual,
+                    write: true,
+                }),
+                constants,
+            ),
+            // 1 > 0 passes where a sample is covered; early, so uncovered blocks are skipped.
+            PipelineKind::Shade(_) => self.full_screen(
+                "shade",
+                if multisampled {
+                    SHADE_MS_FRAG
+                } else {
+                    SHADE_FRAG
+                },
+                (&SHADE_BINDINGS, 1),
+                Some(DepthTest {
+                    compare: DepthCompare::Greater,
+                    write: false,
+                }),
+                constants,
+            ),
+            PipelineKind::Background => self.full_screen(
+                "background",
+                BACKGROUND_FRAG,
+                (&GRAPHICS_BINDINGS, self.samples),
+                None,
+                constants,
+            ),
+        }
+    }
+
+    /// A pipeline drawing the meshes (mesh.vert) into targets of the key's sample count.
+    fn mesh<'a>(
+        &self,
+        name: &'static str,
+        fragment_spirv: &'static [u8],
+        color_formats: &'static [Format],
+        constants: &'a DrawConstants,
+    ) -> GraphicsPipelineDesc<'a> {
+        GraphicsPipelineDesc {
+            name,
+            vertex_spirv: crate::gpu::shaders::MESH_VERT,
+            fragment_spirv,
+            bindings: &GRAPHICS_BINDINGS,
+            vertex_stride: VERTEX_STRIDE,
+            vertex_attributes: &VERTEX_ATTRIBUTES,
+            color_formats,
+            depth_format: Some(Format::Depth32Float),
+            samples: self.samples,
+            depth_test: Some(DepthTest {
+                compare: DepthCompare::Less,
+                write: true,
+            }),
+            fragment_constants: constants.words(),
+            color_writes: true,
+        }
+    }
+
+    /// A pipeline drawing background.vert's full-screen triangle (at depth 1) with `bindings`
+    /// into a target of `samples`.
+    fn full_screen<'a>(
+        &self,
+        name: &'static str,
+        fragment_spirv: &'static [u8],
+        (bindings, samples): (&'static [Binding], u32),
+        depth_test: Option<DepthTest>,
+        constants: &'a DrawConstants,
+    ) -> GraphicsPipelineDesc<'a> {
+        GraphicsPipelineDesc {
+            name,
+            vertex_spirv: crate::gpu::shaders::BACKGROUND_VERT,
+            fragment_spirv,
+            bindings,
+            vertex_stride: VERTEX_STRIDE,
+            vertex_attributes: &[],
+            color_formats: &COLOR_FORMAT,
+            depth_format: Some(Format::Depth32Float),
+            samples,
+            depth_test,
+            fragment_constants: constants.words(),
+            // A colour background is the clear colour: coverage.frag writes only depth.
+            color_writes: self.kind != PipelineKind::Coverage(false),
+        }
+    }
+}
+
+const GBUFFER_FORMATS: [Format; 2] = [Format::Rgba32Float, Format::Rgba32Float];
+const COLOR_FORMAT: [Format; 1] = [Format::Rgba32Float];
+
+/// Every pipeline built so far.
+#[derive(Default)]
+pub(super) struct PipelineTable {
+    pipelines: HashMap<PipelineKey, Arc<GraphicsPipeline>>,
+}
+
+impl PipelineTable {
+    /// The pipeline of `key`, built now if this is its first use.
+    pub fn get(&mut self, gpu: &GpuContext, key: PipelineKey) -> Result<Arc<GraphicsPipeline>> {
+        let pipeline = match self.pipelines.entry(key) {
+            Entry::Occupied(entry) => entry.into_mut(),
+            Entry::Vacant(entry) => {
+                let constants = key.constants();
+                let pipeline = gpu.create_graphics_pipeline(&key.desc(&constants))?;
+                entry.insert(Arc::new(pipeline))
+            }
+        };
+        Ok(Arc::clone(pipeline))
+    }
+}
+
+// Descriptor sets name the environment's images (and the shading pass the targets), which may
+// differ from the last draw's; they are cheap (one small pool each), so they are made per draw.
+
+/// The environment layers as the sampler array binding wants them: unused array slots repeat the
+/// last layer, since every element needs a valid descriptor.
+fn layer_images(environment: &GpuEnvironment) -> Vec<&Image> {
+    let mut layer_images: Vec<&Image> = environment.layers.iter().collect();
+    if let Some(&last) = layer_images.last() {
+        layer_images.resize(MAX_ENV_LAYERS, last);
+    }
+    layer_images
+}
+
+/// A set of [`GRAPHICS_BINDINGS`]: `frame` and the environment.
+pub(super) fn graphics_set(
+    gpu: &GpuContext,
+    pipeline: &GraphicsPipeline,
+    frame: &Buffer,
+    environment: &GpuEnvironment,
+    sampler: &Sampler,
+) -> Result<DescriptorSet> {
+    Ok(gpu.create_descriptor_set(
+        pipeline.layout(),
+        &[
+            (FRAME_BINDING, Resource::Buffer(frame)),
+            (
+                ENV_LAYERS_BINDING,
+                Resource::SampledImages(layer_images(environment), sampler),
+            ),
+            (
+                ENV_IRRADIANCE_BINDING,
+                Resource::SampledImage(&environment.irradiance, sampler),
+            ),
+        ],
+    )?)
+}
+
+/// A set of [`SHADE_BINDINGS`]: the draw's buffers, the environment and the G-buffer.
+pub(super) fn shade_set(
+    gpu: &GpuContext,
+    pipeline: &GraphicsPipeline,
+    buffers: &DrawBuffers,
+    environment: &GpuEnvironment,
+    sampler: &Sampler,
+    (position, normal): (&Image, &Image),
+) -> Result<DescriptorSet> {
+    Ok(gpu.create_descriptor_set(
+        pipeline.layout(),
+        &[
+            (FRAME_BINDING, Resource::Buffer(&buffers.scene_frame)),
+            (FRESNEL_KNOTS_BINDING, Resource::TexelBuffer(&buffers.knots)),
+            (
+                ENV_LAYERS_BINDING,
+                Resource::SampledImages(layer_images(environment), sampler),
+            ),
+            (
+                ENV_IRRADIANCE_BINDING,
+                Resource::SampledImage(&environment.irradiance, sampler),
+            ),
+            (
+                OBJECT_MATERIAL_BINDING,
+                Resource::TexelBuffer(&buffers.materials),
+            ),
+            (
+                GBUFFER_POSITION_BINDING,
+                Resource::SampledImage(position, sampler),
+            ),
+            (
+                GBUFFER_NORMAL_BINDING,
+                Resource::SampledImage(normal, sampler),
+            ),
+        ],
+    )?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fresnel_on_pow2_grid;
+
+    fn knots(angles: &[f32]) -> Vec<[f32; 4]> {
+        angles.iter().map(|&a| [a, 0.1, 0.2, 0.3]).collect()
+    }
+
+    /// The shader skips its interval search only for tables whose knots are exactly i·2^e.
+    #[test]
+    fn pow2_grid_is_recognised_exactly() {
+        let degrees: Vec<f32> = (0..=90).map(|i| i as f32).collect();
+        assert!(fresnel_on_pow2_grid(&knots(&degrees)));
+        let halves: Vec<f32> = (0..=180).map(|i| i as f32 * 0.5).collect();
+        assert!(fresnel_on_pow2_grid(&knots(&halves)));
+        let fives: Vec<f32> = (0..=18).map(|i| i as f32 * 5.0).collect();
+        assert!(
+            !fresnel_on_pow2_grid(&knots(&fives)),
+            "5 is not a power of two"
+        );
+        let mut uneven = degrees.clone();
+        uneven[40] = 40.5;
+        assert!(!fresnel_on_pow2_grid(&knots(&uneven)));
+        assert!(
+            !fresnel_on_pow2_grid(&knots(&[1.0, 2.0, 3.0])),
+            "must start at 0"
+        );
+        assert!(!fresnel_on_pow2_grid(&knots(&[0.0])));
+        assert!(!fresnel_on_pow2_grid(&knots(&[0.0, 0.0])));
+    }
+}

@@ -1,0 +1,185 @@
+//! What a caller hands the draw and gets back: the scene, the settings and options, the timings;
+//! and the checks a draw makes of them before touching the device.
+
+use crate::environment::gpu::GpuEnvironment;
+use crate::environment::params::ViewBlur;
+use crate::gpu::shaders::interface::{MAX_ENV_LAYERS, MAX_LIGHTS, MAX_SAMPLES};
+use crate::gpu::GpuContext;
+use crate::model::{BrdfParams, FresnelTable};
+use crate::raster::camera::Camera;
+use crate::raster::lights::Light;
+use crate::raster::mesh::Mesh;
+use crate::{Error, Result};
+
+/// Sample counts the renderer offers (`--samples 1|4`; lavapipe supports exactly these).
+pub const SUPPORTED_SAMPLES: [u32; 2] = [1, MAX_SAMPLES];
+
+/// Most Fresnel knots of one draw, all objects together: the shaders receive each table's first
+/// knot as an f32 (`ObjectMaterial::fresnel_first`), exact below 2^24.
+pub const MAX_DRAW_KNOTS: usize = 1 << 24;
+
+/// Image size and anti-aliasing of one render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub samples: u32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 1024,
+            height: 1024,
+            samples: 4,
+        }
+    }
+}
+
+/// What fills the pixels the mesh does not cover.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum Background {
+    /// Alpha 0 (coverage): compose the render over anything later.
+    #[default]
+    Transparent,
+    /// An opaque colour (linear radiance).
+    Color([f32; 3]),
+    /// The sharp environment (layer 0) along each pixel's primary ray; black without one.
+    Environment,
+}
+
+impl Background {
+    /// The colour the draw's targets are cleared to: the background where it is a colour (or
+    /// transparent); the environment one is drawn.
+    pub(crate) fn clear_color(self) -> [f32; 4] {
+        match self {
+            Background::Transparent | Background::Environment => [0.0; 4],
+            Background::Color([r, g, b]) => [r, g, b, 1.0],
+        }
+    }
+}
+
+/// One lacquered object: a mesh in world space and its material.
+#[derive(Clone, Copy)]
+pub struct DrawObject<'a> {
+    pub mesh: &'a Mesh,
+    pub brdf: &'a BrdfParams,
+    pub fresnel: &'a FresnelTable,
+    pub view_blur: ViewBlur,
+}
+
+/// What one draw shows.
+pub struct DrawScene<'a> {
+    pub objects: &'a [DrawObject<'a>],
+    pub camera: &'a Camera,
+    pub lights: &'a [Light],
+    /// The prefiltered environment lighting the objects, if any.
+    pub environment: Option<&'a GpuEnvironment>,
+    pub background: Background,
+}
+
+/// The fragment shader of the mesh pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum MeshShading {
+    /// The lacquer model (every real render): G-buffer pass + shading pass.
+    #[default]
+    Lacquer,
+    /// trivial.frag drawn forward: a constant colour, the rasteriser's floor for the same
+    /// geometry (benchmarks).
+    Trivial,
+}
+
+/// How [`LacquerRenderer::render_meshes`](super::LacquerRenderer::render_meshes) draws.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DrawOptions {
+    pub shading: MeshShading,
+    /// Record timestamp queries and return [`DrawTimings`].
+    pub timed: bool,
+}
+
+/// GPU time of one draw's passes from timestamp queries, in seconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DrawTimings {
+    /// The drawing: for the lacquer draw the G-buffer pass and the shading pass; for the forward
+    /// draw the background (if any), the mesh draws, the end of the pass and the MSAA resolve.
+    pub pass: f64,
+    /// The image (shaded or resolved) → readback buffer.
+    pub copy_out: f64,
+    /// From the first command to the last.
+    pub total: f64,
+}
+
+impl std::ops::AddAssign for DrawTimings {
+    fn add_assign(&mut self, strip: DrawTimings) {
+        self.pass += strip.pass;
+        self.copy_out += strip.copy_out;
+        self.total += strip.total;
+    }
+}
+
+/// Refuses, before any device work, a draw the device or the shaders cannot take.
+pub(crate) fn validate(
+    gpu: &GpuContext,
+    scene: &DrawScene<'_>,
+    settings: &RenderSettings,
+) -> Result<()> {
+    let max = gpu.info().max_image_dimension_2d;
+    for (field, value) in [("width", settings.width), ("height", settings.height)] {
+        if value == 0 || value > max {
+            return Err(Error::invalid(
+                field,
+                value,
+                format!("the image size must be 1..={max} pixels on this device"),
+            ));
+        }
+    }
+    if !SUPPORTED_SAMPLES.contains(&settings.samples) {
+        return Err(Error::invalid(
+            "samples",
+            settings.samples,
+            format!(
+                "valid sample counts are {} and {}",
+                SUPPORTED_SAMPLES[0], SUPPORTED_SAMPLES[1]
+            ),
+        ));
+    }
+    if scene.lights.len() > MAX_LIGHTS {
+        return Err(Error::invalid(
+            "lights",
+            scene.lights.len(),
+            format!("at most {MAX_LIGHTS} lights per draw"),
+        ));
+    }
+    if let Some(env) = scene.environment {
+        if env.layers.len() > MAX_ENV_LAYERS {
+            return Err(Error::invalid(
+                "layers",
+                env.layers.len(),
+                format!("at most {MAX_ENV_LAYERS} environment layers"),
+            ));
+        }
+    }
+    scene.camera.validate()?;
+    for light in scene.lights {
+        light.validate()?;
+    }
+    let knots: usize = scene
+        .objects
+        .iter()
+        .map(|o| o.fresnel.angles_deg().len())
+        .sum();
+    if knots > MAX_DRAW_KNOTS {
+        return Err(Error::invalid(
+            "Fresnel knots",
+            knots,
+            format!(
+                "at most {MAX_DRAW_KNOTS} Fresnel table knots per draw, all objects together; \
+                 use coarser tables or render fewer objects at once"
+            ),
+        ));
+    }
+    for object in scene.objects {
+        object.mesh.validate()?;
+    }
+    Ok(())
+}
