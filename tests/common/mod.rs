@@ -109,3 +109,8 @@ pub fn rel_err(a: [f32; 4], b: [f32; 4], floor: f64) -> f64 {
         .map(|c| (f64::from(a[c]) - f64::from(b[c])).abs() / f64::from(b[c]).abs().max(floor))
         .fold(0.0, f64::max)
 }
+
+/// The bad-input corpus's helpers (running the CLI on hostile files, error-kind matching).
+pub mod corpus;
+/// The property tests' shared budget, properties and mutations.
+pub mod prop;

@@ -1,0 +1,4 @@
+mod corpus;
+mod gpu;
+mod oracle;
+mod properties;

@@ -1,0 +1,4 @@
+mod cli;
+mod errors;
+mod recovery;
+mod render;

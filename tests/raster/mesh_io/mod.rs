@@ -1,0 +1,6 @@
+mod corpus;
+mod export;
+mod fuzz;
+mod gltf;
+mod obj;
+mod properties;

@@ -1,0 +1,3 @@
+mod draw;
+mod mesh;
+mod mesh_io;

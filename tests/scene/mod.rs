@@ -1,0 +1,7 @@
+mod batch;
+mod cli;
+mod corpus;
+mod errors;
+mod examples;
+mod properties;
+mod renderer;

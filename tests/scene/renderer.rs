@@ -1,0 +1,181 @@
+//! The one renderer (`shikki::scene::SceneRenderer`) every entry point draws through: a map named
+//! by path and the same map handed over in memory (the C API's way) give the same bytes; warnings
+//! are returned, once per map, never printed; a scene file's numbers reach the material as the
+//! numbers they are.
+
+use crate::common;
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use common::{assert_no_validation_messages, validated_gpu};
+use shikki::environment::{load_environment, EnvironmentLight, EnvironmentSource};
+use shikki::model::material::{MaterialValue, MATERIAL_KEYS};
+use shikki::model::LacquerMaterial;
+use shikki::output::exr::encode_exr;
+use shikki::output::HdrImage;
+use shikki::scene::{default_scene, parse_scene_str, EnvironmentSpec, Scene, SceneRenderer};
+use shikki::Warning;
+
+const SIZE: u32 = 32;
+
+/// A fresh directory for this test's files.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("shikki-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A 64 × 32 map whose first column is negative (replaced by 0 on load).
+fn bad_pixel_map(dir: &Path) -> PathBuf {
+    let (w, h) = (64u32, 32u32);
+    let pixels = (0..w * h)
+        .map(|i| {
+            if i % w == 0 {
+                [-1.0, 0.5, 0.5, 1.0]
+            } else {
+                [0.8, 0.6, 0.4, 1.0]
+            }
+        })
+        .collect();
+    let path = dir.join("bad-pixels.exr");
+    let image = HdrImage {
+        width: w,
+        height: h,
+        pixels,
+    };
+    std::fs::write(&path, encode_exr(&image).unwrap()).unwrap();
+    path
+}
+
+fn small_scene(environment: EnvironmentSpec) -> Scene {
+    let mut scene = default_scene();
+    scene.output.width = SIZE;
+    scene.output.height = SIZE;
+    scene.output.samples = 1;
+    scene.environment = environment;
+    scene
+}
+
+#[test]
+fn a_map_by_path_and_the_same_map_in_memory_render_the_same_bytes() {
+    let dir = scratch("named-vs-loaded");
+    let path = bad_pixel_map(&dir);
+    let light = EnvironmentLight {
+        intensity: 1.5,
+        rotation_deg: 40.0,
+    };
+    let named = small_scene(EnvironmentSpec::Map {
+        source: EnvironmentSource::Named(path.display().to_string()),
+        light,
+    });
+    let loaded = small_scene(EnvironmentSpec::Map {
+        source: EnvironmentSource::Loaded(Arc::new(
+            load_environment(&path.display().to_string()).unwrap(),
+        )),
+        light,
+    });
+    let gpu = validated_gpu();
+    let by_path = SceneRenderer::with_disk_cache(None)
+        .render(&gpu, &named)
+        .unwrap();
+    let in_memory = SceneRenderer::with_disk_cache(None)
+        .render(&gpu, &loaded)
+        .unwrap();
+    assert_no_validation_messages(&gpu);
+    assert!(
+        by_path.pixels == in_memory.pixels,
+        "the CLI's way in and the C API's differ"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn warnings_are_returned_once_per_map_and_never_printed() {
+    let dir = scratch("renderer-warnings");
+    let path = bad_pixel_map(&dir);
+    let scene = small_scene(EnvironmentSpec::named(path.display().to_string()));
+    let gpu = validated_gpu();
+    let mut renderer = SceneRenderer::with_disk_cache(None);
+    renderer.render(&gpu, &scene).unwrap();
+    let warnings = renderer.take_warnings();
+    assert!(
+        matches!(
+            &warnings[..],
+            [Warning::ReplacedPixels { environment, count: 32 }] if *environment == path.display().to_string()
+        ),
+        "one warning naming the map and its 32 replaced pixels: {warnings:?}"
+    );
+    // Another light is another prefilter of the same map: still no second warning.
+    let mut rotated = scene.clone();
+    if let EnvironmentSpec::Map { light, .. } = &mut rotated.environment {
+        light.rotation_deg = 90.0;
+    }
+    renderer.render(&gpu, &scene).unwrap();
+    renderer.render(&gpu, &rotated).unwrap();
+    assert_eq!(renderer.take_warnings(), Vec::new());
+    assert_no_validation_messages(&gpu);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Every numeric key, set from a scene file's number, holds exactly that number — including
+/// values whose shortest decimal form has 17 digits.
+#[test]
+fn scene_file_numbers_reach_the_material_unchanged() {
+    let tricky = [0.1 + 0.2, 1.0 / 3.0, 2.0_f64.sqrt() - 1.0];
+    for value in tricky {
+        let toml = format!(
+            "[[object]]\nmesh = \"builtin:sphere\"\nmaterial = {{ preset = \"smooth-black\", \
+             a = {value:?}, beta_power = {value:?}, kd = [{value:?}, 0.5, 0.25] }}\n"
+        );
+        let scene = parse_scene_str(&toml, "numbers.toml", Path::new(".")).unwrap();
+        let material = &scene.objects[0].material;
+        assert_eq!(material.diffuse_a.to_bits(), value.to_bits());
+        assert_eq!(material.beta_power.to_bits(), value.to_bits());
+        assert_eq!(material.albedo, [value, 0.5, 0.25]);
+    }
+}
+
+/// The typed setter and the CLI's text setter agree on every key: the same fields, the same
+/// errors.
+#[test]
+fn typed_and_text_setters_agree() {
+    let numbers = [0.3, -0.5, 1.6, 0.0, f64::NAN, f64::INFINITY];
+    for key in MATERIAL_KEYS {
+        let cases: Vec<(MaterialValue, String)> = match *key {
+            "kd" => vec![
+                (MaterialValue::Rgb([0.1, 0.2, 0.3]), "0.1,0.2,0.3".into()),
+                (MaterialValue::Rgb([0.1, 2.0, 0.3]), "0.1,2,0.3".into()),
+                (
+                    MaterialValue::Rgb([0.1, f64::NAN, 0.3]),
+                    "0.1,NaN,0.3".into(),
+                ),
+            ],
+            "extrapolate_g" => vec![
+                (MaterialValue::Bool(true), "true".into()),
+                (MaterialValue::Bool(false), "false".into()),
+            ],
+            "fresnel" => vec![
+                (MaterialValue::Path(Some("t.csv".into())), "t.csv".into()),
+                (MaterialValue::Path(None), "".into()),
+            ],
+            _ => numbers
+                .iter()
+                .map(|&x| (MaterialValue::Number(x), x.to_string()))
+                .collect(),
+        };
+        for (typed, text) in cases {
+            let (mut by_value, mut by_text) =
+                (LacquerMaterial::default(), LacquerMaterial::default());
+            let a = by_value
+                .set_value(key, typed.clone())
+                .map_err(|e| e.to_string());
+            let b = by_text.set(key, &text).map_err(|e| e.to_string());
+            assert_eq!(a, b, "{key}: {typed:?} vs {text:?}");
+            assert_eq!(by_value, by_text, "{key}: {typed:?} vs {text:?}");
+        }
+    }
+    let wrong = LacquerMaterial::default().set_value("m", MaterialValue::Bool(true));
+    assert!(wrong.is_err_and(|e| e.to_string().contains("must be a number")));
+}
