@@ -8,6 +8,7 @@
 
 use shikki::environment::gpu::{GpuPrefilter, PrefilterTimings};
 use shikki::environment::load::load_environment;
+use shikki::environment::EnvironmentLight;
 use shikki::environment::{oracle, Equirect, PrefilterParams};
 use shikki::gpu::{ContextOptions, GpuContext};
 use std::time::Instant;
@@ -78,7 +79,7 @@ fn bench(
     for run in 0..=runs {
         let cpu_before = process_cpu_seconds();
         let start = Instant::now();
-        let (env, t) = prefilter.run_timed(gpu, source, &params, 1.0, 0.0)?;
+        let (env, t) = prefilter.run_timed(gpu, source, &params, EnvironmentLight::default())?;
         let seconds = start.elapsed().as_secs_f64();
         let cpu = cpu_before.zip(process_cpu_seconds()).map(|(a, b)| b - a);
         drop(env);
@@ -124,7 +125,7 @@ fn bench(
         let mut cpu_times = Vec::new();
         for run in 0..=cpu_runs {
             let start = Instant::now();
-            let env = oracle::prefilter_cpu(source, &params, 1.0, 0.0)?;
+            let env = oracle::prefilter_cpu(source, &params, EnvironmentLight::default())?;
             let seconds = start.elapsed().as_secs_f64();
             drop(env);
             if run > 0 {

@@ -2,6 +2,7 @@
 //! plus irradiance of builtin:studio, the GPU compute prefilter (wall clock per run, and the sum of
 //! its timestamped passes) against the CPU oracle on every core (rayon), same parameters.
 
+use crate::environment::EnvironmentLight;
 use serde::Serialize;
 
 use super::{BenchConfig, Stat, Target};
@@ -55,7 +56,7 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<PrefilterBench> {
     let mut breakdown = Vec::new();
     for run in 0..=config.runs {
         let start = std::time::Instant::now();
-        let (env, t) = prefilter.run_timed(gpu, &source, &params, 1.0, 0.0)?;
+        let (env, t) = prefilter.run_timed(gpu, &source, &params, EnvironmentLight::default())?;
         let seconds = start.elapsed().as_secs_f64();
         drop(env);
         if run == 0 {
@@ -85,7 +86,7 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<PrefilterBench> {
     let mut cpu = Vec::new();
     for run in 0..=config.runs {
         let start = std::time::Instant::now();
-        let env = prefilter_cpu(&source, &params, 1.0, 0.0)?;
+        let env = prefilter_cpu(&source, &params, EnvironmentLight::default())?;
         let seconds = start.elapsed().as_secs_f64();
         drop(env);
         if run > 0 {

@@ -228,8 +228,7 @@ fn prefilter(args: PrefilterArgs) -> Result<()> {
         &gpu,
         &loaded.image,
         &params,
-        args.intensity,
-        args.rotation_deg,
+        EnvironmentLight::new(args.intensity, args.rotation_deg),
     )?;
     let cubes = env.read_back(&gpu)?;
     gpu.check_validation()?;

@@ -13,7 +13,8 @@
 
 use super::image::{CubeImage, Equirect, PrefilteredEnvironment};
 use super::params::{
-    equirect_supersample, LayerPlan, PrefilterParams, LOBE_CUTOFF, MAX_FACE_SIZE, MIN_LAYER_FACE,
+    equirect_supersample, EnvironmentLight, LayerPlan, PrefilterParams, LOBE_CUTOFF, MAX_FACE_SIZE,
+    MIN_LAYER_FACE,
 };
 use crate::gpu::shaders::interface::{
     BlurLayerParams, DownsampleParams, EquirectToCubeParams, IrradianceParams, NearHeader,
@@ -150,10 +151,9 @@ impl GpuPrefilter {
         gpu: &GpuContext,
         source: &Equirect,
         params: &PrefilterParams,
-        intensity: f64,
-        rotation_deg: f64,
+        light: EnvironmentLight,
     ) -> Result<GpuEnvironment> {
-        self.run_timed(gpu, source, params, intensity, rotation_deg)
+        self.run_timed(gpu, source, params, light)
             .map(|(env, _)| env)
     }
 
@@ -163,9 +163,12 @@ impl GpuPrefilter {
         gpu: &GpuContext,
         source: &Equirect,
         params: &PrefilterParams,
-        intensity: f64,
-        rotation_deg: f64,
+        light: EnvironmentLight,
     ) -> Result<(GpuEnvironment, PrefilterTimings)> {
+        let EnvironmentLight {
+            intensity,
+            rotation_deg,
+        } = light;
         params.validate()?;
         check_source(source, intensity, rotation_deg)?;
         check_device_limits(gpu.info(), source, params)?;

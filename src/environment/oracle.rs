@@ -16,7 +16,7 @@ use super::cube::{
     direction_to_equirect, face_direction, texel_direction, texel_solid_angle, world_to_environment,
 };
 use super::image::{CubeImage, Equirect, PrefilteredEnvironment};
-use super::params::{PrefilterParams, LOBE_CUTOFF};
+use super::params::{EnvironmentLight, PrefilterParams, LOBE_CUTOFF};
 use crate::{Error, Result};
 
 /// Runs the whole prefilter: layer 0 is the base cube, layer k ≥ 1 the lobe blur of the mip of the
@@ -25,9 +25,12 @@ use crate::{Error, Result};
 pub fn prefilter_cpu(
     source: &Equirect,
     params: &PrefilterParams,
-    intensity: f64,
-    rotation_deg: f64,
+    light: EnvironmentLight,
 ) -> Result<PrefilteredEnvironment> {
+    let EnvironmentLight {
+        intensity,
+        rotation_deg,
+    } = light;
     params.validate()?;
     validate_source(source)?;
     if !(intensity.is_finite() && intensity >= 0.0) {
@@ -391,7 +394,12 @@ mod tests {
             beta_min: 0.02,
             beta_max: 1.0,
         };
-        let env = prefilter_cpu(&Equirect::constant(64, 32, c), &params, 2.0, 30.0).unwrap();
+        let env = prefilter_cpu(
+            &Equirect::constant(64, 32, c),
+            &params,
+            EnvironmentLight::new(2.0, 30.0),
+        )
+        .unwrap();
         // Every step is a normalised weighted mean of equal values (× intensity 2): only f32
         // rounding of the stored texels remains (≤ 6e-8 relative); 1e-6 leaves margin.
         for (k, layer) in env.layers.iter().enumerate() {
@@ -627,17 +635,16 @@ mod tests {
             beta_min: 0.5,
             beta_max: 0.5,
         };
-        assert!(prefilter_cpu(&src, &good, f64::NAN, 0.0).is_err());
-        assert!(prefilter_cpu(&src, &good, -1.0, 0.0).is_err());
-        assert!(prefilter_cpu(&src, &good, 1.0, f64::INFINITY).is_err());
+        assert!(prefilter_cpu(&src, &good, EnvironmentLight::new(f64::NAN, 0.0)).is_err());
+        assert!(prefilter_cpu(&src, &good, EnvironmentLight::new(-1.0, 0.0)).is_err());
+        assert!(prefilter_cpu(&src, &good, EnvironmentLight::new(1.0, f64::INFINITY)).is_err());
         assert!(prefilter_cpu(
             &src,
             &PrefilterParams {
                 face_size: 12,
                 ..good
             },
-            1.0,
-            0.0
+            EnvironmentLight::default()
         )
         .is_err());
         let broken = Equirect {
@@ -645,7 +652,7 @@ mod tests {
             height: 4,
             pixels: vec![[1.0; 3]; 3],
         };
-        assert!(prefilter_cpu(&broken, &good, 1.0, 0.0).is_err());
-        assert!(prefilter_cpu(&src, &good, 1.0, 0.0).is_ok());
+        assert!(prefilter_cpu(&broken, &good, EnvironmentLight::default()).is_err());
+        assert!(prefilter_cpu(&src, &good, EnvironmentLight::default()).is_ok());
     }
 }

@@ -171,6 +171,13 @@ impl Default for EnvironmentLight {
 }
 
 impl EnvironmentLight {
+    pub const fn new(intensity: f64, rotation_deg: f64) -> Self {
+        Self {
+            intensity,
+            rotation_deg,
+        }
+    }
+
     /// Bit-exact equality: two lights that prefilter to different bytes (0° and −0° included)
     /// are never taken for one another by a cache.
     pub fn same_bits(&self, other: &Self) -> bool {

@@ -192,6 +192,6 @@ impl EnvironmentPreparer {
             Some(pipelines) => pipelines,
             empty => empty.insert(GpuPrefilter::new(gpu)?),
         };
-        pipelines.run(gpu, image, params, light.intensity, light.rotation_deg)
+        pipelines.run(gpu, image, params, light)
     }
 }

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use toml::de::{DeTable, DeValue};
 
 use super::fresnel::FresnelTable;
-use super::material::{LacquerMaterial, MATERIAL_KEYS};
+use super::material::{LacquerMaterial, MaterialValue, MATERIAL_KEYS};
 use crate::text::nearest;
 // Public only for the scene loader's imports, until they name `crate::text`.
 use crate::text::read_text_file;
@@ -302,7 +302,7 @@ fn apply(
         let message = unknown_key_message(key);
         return Err(spans.error(entry.key_span.as_ref(), key, &message));
     }
-    let text = match (key, &entry.value) {
+    let value = match (key, &entry.value) {
         ("kd", Value::Array(items)) => {
             let numbers: Vec<f64> = items
                 .iter()
@@ -314,20 +314,20 @@ fn apply(
             if numbers.len() != 3 || items.len() != 3 {
                 return Err(wrong_type("an array of three numbers [r, g, b]"));
             }
-            format!("{},{},{}", numbers[0], numbers[1], numbers[2])
+            MaterialValue::Rgb([numbers[0], numbers[1], numbers[2]])
         }
         ("kd", _) => return Err(wrong_type("an array of three numbers [r, g, b]")),
-        ("extrapolate_g", Value::Bool(b)) => b.to_string(),
+        ("extrapolate_g", Value::Bool(b)) => MaterialValue::Bool(*b),
         ("extrapolate_g", _) => return Err(wrong_type("a boolean (true or false)")),
         ("fresnel", Value::Str(path)) => {
             return set_fresnel(material, path, base_dir).map_err(|e| at_value(&e.to_string()));
         }
         ("fresnel", _) => return Err(wrong_type("a string (the path of a Fresnel CSV)")),
-        (_, Value::Number(x)) => format!("{x}"),
+        (_, Value::Number(x)) => MaterialValue::Number(*x),
         (_, _) => return Err(wrong_type("a number")),
     };
     material
-        .set(key, &text)
+        .set_value(key, value)
         .map_err(|e| at_value(&e.to_string()))
 }
 

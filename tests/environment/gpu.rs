@@ -2,6 +2,7 @@
 //! SPEC §4's definition, and the environment-lit render against the white-furnace closed form.
 
 use crate::common;
+use shikki::environment::EnvironmentLight;
 
 use common::{
     assert_no_validation_messages, quantile, rel_err, synthetic_environment, validated_gpu,
@@ -38,7 +39,12 @@ fn white_furnace_layers_are_constant_and_irradiance_is_pi_c() {
     let c = [0.75f32, 1.5, 3.0];
     let source = Equirect::constant(256, 128, c);
     let env = prefilter
-        .run(&gpu, &source, &small_params(64), 1.0, 30.0)
+        .run(
+            &gpu,
+            &source,
+            &small_params(64),
+            EnvironmentLight::new(1.0, 30.0),
+        )
         .unwrap();
     let cubes = env.read_back(&gpu).unwrap();
     assert_eq!(cubes.layers.len(), 8);
@@ -69,10 +75,10 @@ fn gpu_layers_match_the_cpu_oracle_every_texel() {
     let params = small_params(128);
     let env = GpuPrefilter::new(&gpu)
         .unwrap()
-        .run(&gpu, &source, &params, 1.5, 25.0)
+        .run(&gpu, &source, &params, EnvironmentLight::new(1.5, 25.0))
         .unwrap();
     let got = env.read_back(&gpu).unwrap();
-    let want = oracle::prefilter_cpu(&source, &params, 1.5, 25.0).unwrap();
+    let want = oracle::prefilter_cpu(&source, &params, EnvironmentLight::new(1.5, 25.0)).unwrap();
     let cubes = |e: &shikki::environment::PrefilteredEnvironment| -> Vec<CubeImage> {
         e.layers.iter().chain([&e.irradiance]).cloned().collect()
     };
@@ -101,7 +107,7 @@ fn gpu_layers_match_the_definition_on_a_hard_map() {
     let params = small_params(128);
     let env = GpuPrefilter::new(&gpu)
         .unwrap()
-        .run(&gpu, &source, &params, 1.0, 0.0)
+        .run(&gpu, &source, &params, EnvironmentLight::default())
         .unwrap();
     let got = env.read_back(&gpu).unwrap();
     for (k, layer) in got.layers.iter().enumerate().skip(1) {
@@ -195,7 +201,12 @@ fn layers_have_no_seams_at_cube_edges() {
     let source = synthetic_environment(512, 256);
     let env = GpuPrefilter::new(&gpu)
         .unwrap()
-        .run(&gpu, &source, &small_params(128), 1.0, 0.0)
+        .run(
+            &gpu,
+            &source,
+            &small_params(128),
+            EnvironmentLight::default(),
+        )
         .unwrap();
     let got = env.read_back(&gpu).unwrap();
     let luminance = |t: [f32; 4]| f64::from(0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2]);
@@ -246,8 +257,7 @@ fn render_sphere(
             gpu,
             source,
             &PrefilterParams::for_source_width(source.width),
-            1.0,
-            0.0,
+            EnvironmentLight::default(),
         )
         .unwrap();
     let material = LacquerMaterial::preset(preset).unwrap();
@@ -417,7 +427,12 @@ fn a_face_beyond_the_device_limits_is_refused_and_defaults_are_clamped() {
         params.face_size = 2 * largest;
         let err = GpuPrefilter::new(&gpu)
             .unwrap()
-            .run(&gpu, &synthetic_environment(64, 32), &params, 1.0, 0.0)
+            .run(
+                &gpu,
+                &synthetic_environment(64, 32),
+                &params,
+                EnvironmentLight::default(),
+            )
             .err()
             .expect("a face beyond the device's limits must be refused");
         let text = err.to_string();
@@ -437,7 +452,12 @@ fn one_prefilter_runs_many_times_without_hazards() {
     let mut first = None;
     for _ in 0..3 {
         let env = prefilter
-            .run(&gpu, &source, &small_params(32), 1.0, 0.0)
+            .run(
+                &gpu,
+                &source,
+                &small_params(32),
+                EnvironmentLight::default(),
+            )
             .unwrap();
         let cubes = env.read_back(&gpu).unwrap();
         // Deterministic: every run gives the same texels.
@@ -455,7 +475,12 @@ fn an_uploaded_environment_reads_back_identical_texels_and_renders_the_same() {
     let source = synthetic_environment(128, 64);
     let env = GpuPrefilter::new(&gpu)
         .unwrap()
-        .run(&gpu, &source, &small_params(32), 1.0, 10.0)
+        .run(
+            &gpu,
+            &source,
+            &small_params(32),
+            EnvironmentLight::new(1.0, 10.0),
+        )
         .unwrap();
     let host = env.read_back(&gpu).unwrap();
     let uploaded = GpuEnvironment::upload(&gpu, &host).unwrap();
@@ -531,7 +556,7 @@ fn step_one_reads_exactly_the_oracles_source_pixels() {
             beta_max: 1.0,
         };
         let env = prefilter
-            .run(&gpu, &source, &params, 1.0, rotation)
+            .run(&gpu, &source, &params, EnvironmentLight::new(1.0, rotation))
             .unwrap();
         let got = &env.read_back(&gpu).unwrap().layers[0];
         let want = oracle::equirect_to_cube(&source, face, 1.0, rotation);

@@ -4,6 +4,7 @@
 //! every compression the `exr` crate writes. The timing of the oracle at
 //! face 512, K = 8 is a benchmark: `cargo bench --bench prefilter`.
 
+use shikki::environment::EnvironmentLight;
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
@@ -52,7 +53,7 @@ fn synthetic() -> &'static (Equirect, PrefilteredEnvironment) {
     static CELL: OnceLock<(Equirect, PrefilteredEnvironment)> = OnceLock::new();
     CELL.get_or_init(|| {
         let src = Equirect::from_fn(512, 256, synthetic_radiance);
-        let env = prefilter_cpu(&src, &synthetic_params(), 1.0, 0.0).unwrap();
+        let env = prefilter_cpu(&src, &synthetic_params(), EnvironmentLight::default()).unwrap();
         (src, env)
     })
 }

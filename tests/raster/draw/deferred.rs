@@ -11,6 +11,7 @@
 //!   the same GLSL (frame.glsl's camera_ray and sharp_radiance) on both paths.
 
 use crate::common;
+use shikki::environment::EnvironmentLight;
 
 use common::{assert_no_validation_messages, synthetic_environment, validated_gpu};
 use glam::DVec3;
@@ -54,7 +55,12 @@ fn environment(gpu: &GpuContext) -> GpuEnvironment {
     };
     GpuPrefilter::new(gpu)
         .expect("prefilter pipelines")
-        .run(gpu, &synthetic_environment(128, 64), &params, 1.0, 0.0)
+        .run(
+            gpu,
+            &synthetic_environment(128, 64),
+            &params,
+            EnvironmentLight::default(),
+        )
         .expect("prefiltered environment")
 }
 

@@ -8,6 +8,7 @@
 //! well.
 
 use crate::common;
+use shikki::environment::EnvironmentLight;
 
 use std::collections::BTreeSet;
 use std::fs::File;
@@ -336,7 +337,12 @@ fn prefilter_render_and_batch_in_one_process_are_silent_under_sync_validation() 
     let params = PrefilterParams::for_source_width(loaded.image.width);
     drop(
         prefilter
-            .run(&gpu, &loaded.image, &params, 1.0, 30.0)
+            .run(
+                &gpu,
+                &loaded.image,
+                &params,
+                EnvironmentLight::new(1.0, 30.0),
+            )
             .unwrap(),
     );
     drop(prefilter);
