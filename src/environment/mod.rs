@@ -11,8 +11,10 @@
 //! ```
 //! `prepare.rs` is the one way a renderer gets its environment: load → device-clamped parameters
 //! → disk cache (`disk_cache.rs`) → GPU prefilter. `definition.rs` is SPEC §4's integral
-//! evaluated at full source resolution, for tests only.
+//! evaluated at full source resolution, for tests only; `brdf_definition.rs` the same for the
+//! `brdf` environment model's specular integral.
 
+pub mod brdf_definition;
 pub mod cube;
 pub mod definition;
 pub mod disk_cache;

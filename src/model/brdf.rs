@@ -52,16 +52,49 @@ pub fn lacquer_brdf(
     v: DVec3,
     l: DVec3,
 ) -> [f64; 3] {
+    let Some((f, spec)) = specular_factors(p, fresnel, n, v, l) else {
+        return [0.0; 3];
+    };
+    let diffuse = view_dependent_diffuse(p, n.dot(v));
+    [
+        diffuse[0] + f[0] * spec,
+        diffuse[1] + f[1] * spec,
+        diffuse[2] + f[2] * spec,
+    ]
+}
+
+/// f_spec of SPEC §2 alone [1/sr], RGB: F(acos vh)·D(nh)·G / (4·nv·nl); 0 where f_r is 0.
+pub fn lacquer_specular(
+    p: &BrdfParams,
+    fresnel: &FresnelTable,
+    n: DVec3,
+    v: DVec3,
+    l: DVec3,
+) -> [f64; 3] {
+    match specular_factors(p, fresnel, n, v, l) {
+        Some((f, spec)) => f.map(|f| f * spec),
+        None => [0.0; 3],
+    }
+}
+
+/// F and D·G/(4·nv·nl), or `None` where the BRDF is 0 (nv or nl not positive, or no H).
+fn specular_factors(
+    p: &BrdfParams,
+    fresnel: &FresnelTable,
+    n: DVec3,
+    v: DVec3,
+    l: DVec3,
+) -> Option<([f64; 3], f64)> {
     let (nv, nl) = (n.dot(v), n.dot(l));
     // Written positively so that NaN input also lands here.
     let visible = nv > 0.0 && nl > 0.0;
     if !visible {
-        return [0.0; 3];
+        return None;
     }
     let half = v + l;
     let half_len2 = half.length_squared();
     if half_len2 <= 0.0 || !half_len2.is_finite() {
-        return [0.0; 3];
+        return None;
     }
     let h = half / half_len2.sqrt();
     let nh = n.dot(h);
@@ -70,13 +103,7 @@ pub fn lacquer_brdf(
     let d = beckmann_d_sin2(nh, sin2_alpha, p.beckmann_m);
     let g = cook_torrance_g(nh, nv, nl, vh);
     let f = fresnel.eval(vh.clamp(0.0, 1.0).acos().to_degrees());
-    let spec = d * g / (4.0 * nv * nl);
-    let diffuse = view_dependent_diffuse(p, nv);
-    [
-        diffuse[0] + f[0] * spec,
-        diffuse[1] + f[1] * spec,
-        diffuse[2] + f[2] * spec,
-    ]
+    Some((f, d * g / (4.0 * nv * nl)))
 }
 
 /// Normalised Beckmann distribution D(nh) = exp((nh² - 1)/(m²·nh²)) / (π·m²·nh⁴) [1/sr].

@@ -13,6 +13,6 @@ pub mod material;
 pub mod material_file;
 pub mod spectral;
 
-pub use brdf::{lacquer_brdf, BrdfParams};
+pub use brdf::{lacquer_brdf, lacquer_specular, BrdfParams};
 pub use fresnel::FresnelTable;
 pub use material::{LacquerMaterial, MATERIAL_KEYS, PRESET_NAMES};
