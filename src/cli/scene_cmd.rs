@@ -2,9 +2,12 @@
 //! argument handling only. Every render form builds a `Scene` and goes through
 //! [`render_built_scene`]; the scene schema, renderer and batch runner live in `crate::scene`.
 
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::args::{BatchArgs, RenderArgs};
 use crate::output::{self, OutputFormat, PngSettings};
@@ -151,7 +154,7 @@ pub fn run_batch(args: BatchArgs) -> Result<()> {
     let mut options = BatchOptions::new(args.out.clone());
     options.shard = shard;
     options.force = args.force;
-    options.progress = !args.quiet;
+    options.observer = Arc::new(TerminalProgress::new(!args.quiet));
     watch_interrupts(&options.cancel);
     let summary = batch::run_batch(&gpu, &plan, &options)?;
     eprintln!(
@@ -198,5 +201,44 @@ fn watch_interrupts(cancel: &Arc<AtomicBool>) {
     let first = signal_hook::flag::register(SIGINT, Arc::clone(cancel));
     if let Err(e) = second.and(first) {
         eprintln!("warning: cannot handle Ctrl-C ({e}); it will stop the batch at once");
+    }
+}
+
+/// The batch's progress on stderr: a bar (when asked for and stderr is a terminal) with the run's
+/// warning and error lines printed above it.
+#[derive(Debug)]
+struct TerminalProgress {
+    bar: ProgressBar,
+}
+
+impl TerminalProgress {
+    fn new(wanted: bool) -> Self {
+        let bar = if wanted && std::io::stderr().is_terminal() {
+            let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+            if let Ok(style) = ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} jobs  {per_sec}  ETA {eta}  {msg}",
+            ) {
+                bar.set_style(style);
+            }
+            bar
+        } else {
+            ProgressBar::hidden()
+        };
+        Self { bar }
+    }
+}
+
+impl batch::BatchObserver for TerminalProgress {
+    fn start(&self, jobs: usize) {
+        self.bar.set_length(jobs as u64);
+    }
+    fn job_done(&self) {
+        self.bar.inc(1);
+    }
+    fn line(&self, text: &str) {
+        self.bar.suspend(|| eprintln!("{text}"));
+    }
+    fn finish(&self) {
+        self.bar.finish_and_clear();
     }
 }

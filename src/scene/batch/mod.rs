@@ -32,7 +32,7 @@ use crate::output::OutputFormat;
 use crate::text::read_text_file;
 use crate::Result;
 
-pub use run::{run_batch, BatchOptions, BatchSummary};
+pub use run::{run_batch, BatchObserver, BatchOptions, BatchSummary, Silent};
 pub use sink::{FileSystem, OutputSink};
 
 const JOBS_KEYS: &[&str] = &["scene", "name", "sweep"];

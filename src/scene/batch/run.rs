@@ -14,12 +14,9 @@
 //! contact sheet describe what finished, so the same command resumes.
 
 use std::collections::BTreeMap;
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc};
-
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::manifest::{self, Manifest, ManifestRow, STATUS_OK};
 use super::sheet::{contact_sheet_png, Thumbnail, Tile};
@@ -42,8 +39,9 @@ pub struct BatchOptions {
     pub shard: (usize, usize),
     /// Render every job even if its output and manifest hash match.
     pub force: bool,
-    /// Show the progress bar (only drawn when stderr is a terminal).
-    pub progress: bool,
+    /// Told of the run's progress and of every warning and failed job: the library prints
+    /// nothing itself (the CLI draws a progress bar and prints the lines).
+    pub observer: Arc<dyn BatchObserver>,
     /// Set it (from any thread or a signal handler) to stop after the image in flight; the run
     /// then returns normally with [`BatchSummary::cancelled`].
     pub cancel: Arc<AtomicBool>,
@@ -58,12 +56,31 @@ impl BatchOptions {
             out_dir: out_dir.into(),
             shard: (0, 1),
             force: false,
-            progress: false,
+            observer: Arc::new(Silent),
             cancel: Arc::new(AtomicBool::new(false)),
             sink: Arc::new(FileSystem),
         }
     }
 }
+
+/// What a run reports while it goes, from the render and the writer thread. Every method has a
+/// default that does nothing.
+pub trait BatchObserver: Send + Sync + std::fmt::Debug {
+    /// Up to `jobs` jobs of this shard are about to run.
+    fn start(&self, _jobs: usize) {}
+    /// A job is finished: rendered, skipped or failed.
+    fn job_done(&self) {}
+    /// A line for the user, already worded: `warning: …`, `error: job N: …`, a note.
+    fn line(&self, _text: &str) {}
+    /// The run is over (also when it failed or was cancelled).
+    fn finish(&self) {}
+}
+
+/// Reports nothing: the default of [`BatchOptions::new`].
+#[derive(Debug)]
+pub struct Silent;
+
+impl BatchObserver for Silent {}
 
 /// How a run ended.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -130,17 +147,16 @@ pub fn run_batch(
         options,
         [&manifest_path, Path::new(&sheet_name)],
     );
-    let progress = progress_bar(jobs.len(), options.progress);
     let mut renderer = SceneRenderer::new(gpu)?;
+    let observer = options.observer.as_ref();
+    observer.start(jobs.len());
 
     let (sender, receiver) = mpsc::sync_channel::<Message>(WRITER_QUEUE);
     let writer_manifest = Manifest::new(manifest_path.clone(), &sweep_paths);
-    let writer_progress = progress.clone();
     let sink: &dyn OutputSink = options.sink.as_ref();
     let mut started = 0;
     let result = std::thread::scope(|scope| {
-        let writer =
-            scope.spawn(move || write_loop(receiver, writer_manifest, writer_progress, sink));
+        let writer = scope.spawn(move || write_loop(receiver, writer_manifest, observer, sink));
         for job in &jobs {
             if options.cancel.load(Ordering::SeqCst) {
                 break;
@@ -148,10 +164,10 @@ pub fn run_batch(
             started += 1;
             let message = render_job(gpu, &mut renderer, plan, job, &options.out_dir, &previous);
             for warning in renderer.take_warnings() {
-                progress.suspend(|| eprintln!("warning: {warning}"));
+                observer.line(&format!("warning: {warning}"));
             }
             if let Message::Failed { row } = &message {
-                progress.suspend(|| eprintln!("error: job {}: {}", row.job, row.status));
+                observer.line(&format!("error: job {}: {}", row.job, row.status));
             }
             if sender.send(message).is_err() {
                 break; // The writer stopped: its error is returned below.
@@ -162,7 +178,7 @@ pub fn run_batch(
             .join()
             .map_err(|_| Error::invalid("batch", "writer thread", "panicked; please report"))?
     });
-    progress.finish_and_clear();
+    observer.finish();
     let (manifest, tiles, counts) = result?;
     let sheet_path = options.out_dir.join(sheet_name);
     let labelled: Vec<Tile> = tiles.into_values().collect();
@@ -198,24 +214,11 @@ fn remove_leftover_temps(
     }
     let removed = sink::remove_leftover_temps(&options.out_dir, &names);
     if removed > 0 {
-        eprintln!(
+        options.observer.line(&format!(
             "removed {removed} temporary file(s) an interrupted run left in {}",
             options.out_dir.display()
-        );
+        ));
     }
-}
-
-fn progress_bar(len: usize, wanted: bool) -> ProgressBar {
-    if !wanted || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::with_draw_target(Some(len as u64), ProgressDrawTarget::stderr());
-    if let Ok(style) =
-        ProgressStyle::with_template("{bar:40} {pos}/{len} jobs  {per_sec}  ETA {eta}  {msg}")
-    {
-        bar.set_style(style);
-    }
-    bar
 }
 
 /// Prepares and renders one job (or decides to skip it); never fails the run.
@@ -278,7 +281,7 @@ type WriterResult = (Manifest, BTreeMap<usize, Tile>, (usize, usize, usize));
 fn write_loop(
     receiver: mpsc::Receiver<Message>,
     mut manifest: Manifest,
-    progress: ProgressBar,
+    observer: &dyn BatchObserver,
     sink: &dyn OutputSink,
 ) -> Result<WriterResult> {
     let mut tiles = BTreeMap::new();
@@ -297,7 +300,7 @@ fn write_loop(
                     (row, Some(Thumbnail::from_hdr(&image, &png)))
                 }
                 Err(e) => {
-                    progress.suspend(|| eprintln!("error: job {}: {e}", row.job));
+                    observer.line(&format!("error: job {}: {e}", row.job));
                     let row = ManifestRow {
                         status: format!("failed: {e}"),
                         ..row
@@ -332,11 +335,11 @@ fn write_loop(
         manifest.rows.insert(row.job, row);
         if let Err(e) = manifest.save(sink) {
             if !manifest_warned {
-                progress.suspend(|| eprintln!("warning: {e}; retrying after the next job"));
+                observer.line(&format!("warning: {e}; retrying after the next job"));
                 manifest_warned = true;
             }
         }
-        progress.inc(1);
+        observer.job_done();
     }
     manifest.save(sink)?;
     Ok((manifest, tiles, (rendered, skipped, failed)))
