@@ -15,6 +15,7 @@
 //! `brdf` environment model's specular integral.
 
 pub mod brdf_definition;
+pub mod brdf_quadrature;
 pub mod cube;
 pub mod definition;
 pub mod disk_cache;

@@ -1,3 +1,4 @@
+mod brdf_model;
 mod corpus;
 mod gpu;
 mod oracle;
