@@ -109,7 +109,7 @@ pub unsafe extern "C" fn shikki_renderer_create(
 ) -> ShikkiStatus {
     ffi_boundary!({
         check_out(out, "out")?;
-        let no_ray_query = std::env::var("SHIKKI_RAY_QUERY").is_ok_and(|v| v == "0");
+        let no_ray_query = ContextOptions::ray_query_off_by_env();
         let context = if options.is_null() {
             ContextOptions {
                 no_ray_query,

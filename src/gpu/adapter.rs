@@ -136,7 +136,7 @@ impl Quirks {
 }
 
 /// (major, minor) from a Mesa driver's `driverInfo` ("Mesa 22.3.6 (LLVM 15.0.6)").
-fn mesa_version(driver_info: &str) -> Option<(u32, u32)> {
+pub(crate) fn mesa_version(driver_info: &str) -> Option<(u32, u32)> {
     let rest = driver_info.split("Mesa ").nth(1)?;
     let mut numbers = rest
         .split(|c: char| !c.is_ascii_digit())
@@ -197,6 +197,13 @@ pub(crate) const RAY_QUERY_EXTENSIONS: [&std::ffi::CStr; 3] = [
     ash::khr::acceleration_structure::NAME,
     ash::khr::ray_query::NAME,
 ];
+
+impl AdapterInfo {
+    /// (major, minor) of the Mesa release in the driver's info string, for Mesa drivers.
+    pub fn mesa_version(&self) -> Option<(u32, u32)> {
+        mesa_version(&self.driver_info)
+    }
+}
 
 pub(crate) struct ChosenAdapter {
     pub physical_device: vk::PhysicalDevice,

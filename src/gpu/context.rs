@@ -43,6 +43,11 @@ impl ContextOptions {
     /// `SHIKKI_VALIDATION=1` turns validation on (`SHIKKI_SYNC_VALIDATION=1` adds its
     /// synchronisation checks); `SHIKKI_DEVICE=<substring>` picks the device;
     /// `SHIKKI_RAY_QUERY=0` leaves ray queries off.
+    /// `SHIKKI_RAY_QUERY=0`: every way of opening a device (CLI, C API, tests) reads it here.
+    pub fn ray_query_off_by_env() -> bool {
+        std::env::var("SHIKKI_RAY_QUERY").is_ok_and(|v| v == "0")
+    }
+
     pub fn from_env() -> Self {
         Self {
             validation: std::env::var("SHIKKI_VALIDATION").is_ok_and(|v| v == "1"),
@@ -52,7 +57,7 @@ impl ContextOptions {
             synchronization_validation: std::env::var("SHIKKI_SYNC_VALIDATION")
                 .is_ok_and(|v| v == "1"),
             pipeline_cache: default_pipeline_cache(),
-            no_ray_query: std::env::var("SHIKKI_RAY_QUERY").is_ok_and(|v| v == "0"),
+            no_ray_query: Self::ray_query_off_by_env(),
         }
     }
 }

@@ -43,12 +43,10 @@ fn context(no_ray_query: bool) -> GpuContext {
 /// Mesa's lavapipe has ray queries from 24.1 on (the reference device, which `scripts/setup`
 /// installs); an older one must report them missing, never enabled.
 fn lavapipe_mesa_version(info: &shikki::gpu::AdapterInfo) -> Option<(u32, u32)> {
-    if !info.name.starts_with("llvmpipe") {
-        return None;
-    }
-    let rest = info.driver_info.split("Mesa ").nth(1)?;
-    let mut numbers = rest.split(|c: char| !c.is_ascii_digit());
-    Some((numbers.next()?.parse().ok()?, numbers.next()?.parse().ok()?))
+    info.name
+        .starts_with("llvmpipe")
+        .then(|| info.mesa_version())
+        .flatten()
 }
 
 #[test]
