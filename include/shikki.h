@@ -100,6 +100,27 @@ typedef uint32_t ShikkiBackground;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
+// Environment models of `shikki_scene_set_environment_model` (scene files' `[render]
+// environment_model`, the CLI's `--env-model`); pass as `uint32_t`.
+enum ShikkiEnvModel
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+  // SPEC §4's paper model: the prefiltered layer picked by β(N·V) (the default).
+  SHIKKI_ENV_MODEL_PAPER = 0,
+  // The integral of the BRDF itself over the environment, by a fixed quadrature (32
+  // Beckmann-lobe samples per pixel reading the prefiltered layers).
+  SHIKKI_ENV_MODEL_BRDF = 1,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum ShikkiEnvModel ShikkiEnvModel;
+#else
+typedef uint32_t ShikkiEnvModel;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
 // A lacquer material (SPEC §2–4 parameters). Threads: setters on one material are serialised;
 // `shikki_scene_add_object` copies the material as it is at that moment.
 // Passed by value; 0 is never a valid handle.
@@ -143,10 +164,10 @@ typedef struct ShikkiRenderer {
 // and one warning as a NUL-terminated UTF-8 sentence, valid only during the call.
 typedef void (*ShikkiWarningCallback)(void *user_data, const char *message);
 
-// Objects, lights, camera, environment, background and output settings of one picture. Threads:
-// changes to one scene are serialised; a render works on a snapshot taken when it starts (the
-// caller's buffer is checked against the same snapshot), so a change made during a render
-// affects the next one, and several renderers may render one scene at once.
+// Objects, lights, camera, environment, environment model, background and output settings of one
+// picture. Threads: changes to one scene are serialised; a render works on a snapshot taken when
+// it starts (the caller's buffer is checked against the same snapshot), so a change made during a
+// render affects the next one, and several renderers may render one scene at once.
 // Passed by value; 0 is never a valid handle.
 typedef struct ShikkiScene {
   uint64_t id;
@@ -360,8 +381,8 @@ enum ShikkiStatus shikki_render_to_file(struct ShikkiRenderer renderer, struct S
 enum ShikkiStatus shikki_image_write(const float *rgba, size_t len, uint32_t width, uint32_t height, float exposure_ev, uint32_t tone_curve, const char *path);
 
 // An empty scene: no objects, no lights, no environment, the default camera, 1024×1024 with 4
-// samples, ACES at 0 EV and the environment as background (black without one) — the scene-file
-// defaults. Add objects, lights, an environment.
+// samples, ACES at 0 EV, the environment as background (black without one) and the paper
+// environment model — the scene-file defaults. Add objects, lights, an environment.
 //
 // # Safety
 // `out` is valid for one write.
@@ -420,6 +441,18 @@ enum ShikkiStatus shikki_scene_set_output(struct ShikkiScene scene, uint32_t wid
 // The display transform of 8-bit and PNG output (SPEC §1): radiance × 2^exposure_ev → tone
 // curve (`ShikkiToneCurve`) → sRGB.
 enum ShikkiStatus shikki_scene_set_display(struct ShikkiScene scene, float exposure_ev, uint32_t tone_curve);
+
+// How the environment lights the scene's objects (scene files' `[render] environment_model`):
+// `SHIKKI_ENV_MODEL_PAPER` (SPEC §4's paper model, the default) or `SHIKKI_ENV_MODEL_BRDF` (the
+// BRDF itself integrated over the environment by a fixed quadrature).
+enum ShikkiStatus shikki_scene_set_environment_model(struct ShikkiScene scene, uint32_t model);
+
+// The scene's environment model (`ShikkiEnvModel`), as set by
+// `shikki_scene_set_environment_model` or the scene TOML's `[render] environment_model`.
+//
+// # Safety
+// `model` is valid for one write.
+enum ShikkiStatus shikki_scene_get_environment_model(struct ShikkiScene scene, uint32_t *model);
 
 // The render size of the scene, so the caller can size its buffer (either pointer may be NULL).
 //

@@ -78,10 +78,10 @@ pub struct ShikkiMaterial {
 }
 impl_handle!(ShikkiMaterial);
 
-/// Objects, lights, camera, environment, background and output settings of one picture. Threads:
-/// changes to one scene are serialised; a render works on a snapshot taken when it starts (the
-/// caller's buffer is checked against the same snapshot), so a change made during a render
-/// affects the next one, and several renderers may render one scene at once.
+/// Objects, lights, camera, environment, environment model, background and output settings of one
+/// picture. Threads: changes to one scene are serialised; a render works on a snapshot taken when
+/// it starts (the caller's buffer is checked against the same snapshot), so a change made during a
+/// render affects the next one, and several renderers may render one scene at once.
 /// Passed by value; 0 is never a valid handle.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -67,6 +67,18 @@ pub enum ShikkiBackground {
     Environment = 2,
 }
 
+/// Environment models of `shikki_scene_set_environment_model` (scene files' `[render]
+/// environment_model`, the CLI's `--env-model`); pass as `uint32_t`.
+#[repr(u32)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShikkiEnvModel {
+    /// SPEC §4's paper model: the prefiltered layer picked by β(N·V) (the default).
+    Paper = 0,
+    /// The integral of the BRDF itself over the environment, by a fixed quadrature (32
+    /// Beckmann-lobe samples per pixel reading the prefiltered layers).
+    Brdf = 1,
+}
+
 /// The library version, "MAJOR.MINOR.PATCH"; a static string, never freed.
 #[no_mangle]
 pub extern "C" fn shikki_version() -> *const c_char {

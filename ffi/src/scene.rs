@@ -1,9 +1,10 @@
 //! Scene handles: what one picture shows (objects with transforms and materials, lights, camera,
-//! environment, background) and how it is output (size, samples, exposure, tone curve). Built
-//! with calls here, or from scene TOML (`scene_toml.rs`). A scene handle holds a
-//! `shikki::scene::Scene`, the value the CLI and scene files build too, so the renderer cannot
-//! tell where a scene came from. It holds its own references to meshes and environments and its
-//! own copy of each material, so those handles may be destroyed once added.
+//! environment, background), how light is computed (the environment model) and how it is output
+//! (size, samples, exposure, tone curve). Built with calls here, or from scene TOML
+//! (`scene_toml.rs`). A scene handle holds a `shikki::scene::Scene`, the value the CLI and scene
+//! files build too, so the renderer cannot tell where a scene came from. It holds its own
+//! references to meshes and environments and its own copy of each material, so those handles may
+//! be destroyed once added.
 
 use glam::{DMat4, DVec3};
 use shikki::environment::{EnvironmentLight, EnvironmentSource};
@@ -11,12 +12,13 @@ use shikki::model::LacquerMaterial;
 use shikki::output::ToneCurve;
 use shikki::raster::draw::{Background, SUPPORTED_SAMPLES};
 use shikki::raster::{default_lights, Camera, Light, MAX_LIGHTS};
-use shikki::scene::{EnvironmentSpec, MeshSource, Scene, SceneObject};
+use shikki::scene::{EnvironmentModel, EnvironmentSpec, MeshSource, Scene, SceneObject};
 
 use crate::boundary::{array, check_out, ffi_boundary, write_out, FfiError, FfiResult};
 use crate::handles::{self, ShikkiEnvironment, ShikkiMaterial, ShikkiMesh, ShikkiScene};
 use crate::objects::{EnvironmentObject, MeshObject};
 use crate::status::ShikkiStatus;
+use crate::ShikkiEnvModel;
 
 /// Tone curves by their C number (`ShikkiToneCurve`).
 pub fn tone_curve_from_c(value: u32) -> FfiResult<ToneCurve> {
@@ -27,6 +29,25 @@ pub fn tone_curve_from_c(value: u32) -> FfiResult<ToneCurve> {
         _ => Err(FfiError::invalid(format!(
             "tone_curve {value}: use SHIKKI_TONE_CURVE_NONE (0), _REINHARD (1) or _ACES (2)"
         ))),
+    }
+}
+
+/// Environment models by their C number (`ShikkiEnvModel`).
+fn environment_model_from_c(value: u32) -> FfiResult<EnvironmentModel> {
+    match value {
+        v if v == ShikkiEnvModel::Paper as u32 => Ok(EnvironmentModel::Paper),
+        v if v == ShikkiEnvModel::Brdf as u32 => Ok(EnvironmentModel::Brdf),
+        _ => Err(FfiError::invalid(format!(
+            "environment model {value}: use SHIKKI_ENV_MODEL_PAPER (0) or _BRDF (1)"
+        ))),
+    }
+}
+
+/// The C number (`ShikkiEnvModel`) of an environment model.
+fn environment_model_to_c(model: EnvironmentModel) -> u32 {
+    match model {
+        EnvironmentModel::Paper => ShikkiEnvModel::Paper as u32,
+        EnvironmentModel::Brdf => ShikkiEnvModel::Brdf as u32,
     }
 }
 
@@ -60,8 +81,8 @@ fn vec3(v: [f64; 3]) -> DVec3 {
 }
 
 /// An empty scene: no objects, no lights, no environment, the default camera, 1024×1024 with 4
-/// samples, ACES at 0 EV and the environment as background (black without one) — the scene-file
-/// defaults. Add objects, lights, an environment.
+/// samples, ACES at 0 EV, the environment as background (black without one) and the paper
+/// environment model — the scene-file defaults. Add objects, lights, an environment.
 ///
 /// # Safety
 /// `out` is valid for one write.
@@ -372,6 +393,43 @@ pub extern "C" fn shikki_scene_set_display(
             state.output.tone_curve = tone_curve;
             Ok(())
         })
+    })
+}
+
+/// How the environment lights the scene's objects (scene files' `[render] environment_model`):
+/// `SHIKKI_ENV_MODEL_PAPER` (SPEC §4's paper model, the default) or `SHIKKI_ENV_MODEL_BRDF` (the
+/// BRDF itself integrated over the environment by a fixed quadrature).
+#[no_mangle]
+pub extern "C" fn shikki_scene_set_environment_model(
+    scene: ShikkiScene,
+    model: u32,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        let model = environment_model_from_c(model)?;
+        with_scene(scene, |state| {
+            state.render.environment_model = model;
+            Ok(())
+        })
+    })
+}
+
+/// The scene's environment model (`ShikkiEnvModel`), as set by
+/// `shikki_scene_set_environment_model` or the scene TOML's `[render] environment_model`.
+///
+/// # Safety
+/// `model` is valid for one write.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_scene_get_environment_model(
+    scene: ShikkiScene,
+    model: *mut u32,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        check_out(model, "model")?;
+        let value = with_scene(scene, |state| {
+            Ok(environment_model_to_c(state.render.environment_model))
+        })?;
+        // SAFETY: checked non-NULL; writable by contract.
+        unsafe { write_out(model, "model", value) }
     })
 }
 

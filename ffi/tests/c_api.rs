@@ -9,6 +9,9 @@
 //!   included (the C program checks; it exits with the number of failed checks), shared and
 //!   static;
 //! - `threads.c`: the thread-safety contract of docs/c-api.md;
+//! - `environment_model.c`: `shikki_scene_set_environment_model` — BRDF renders differently from
+//!   PAPER, the scene TOML's `[render] environment_model` reaches the handle, an unknown model
+//!   number is refused with a message naming the valid ones;
 //! - `large_environment.c`: an 8192 × 4096 HDRI (written here) renders through the C API as it
 //!   does through the CLI, to the bytes of the Rust API's render; the environment disk cache and
 //!   the warning callback;
@@ -129,6 +132,7 @@ impl Programs {
         programs.compile("error_paths", "error_paths_static", Link::Static);
         programs.compile("threads", "threads", Link::Shared);
         programs.compile("large_environment", "large_environment", Link::Shared);
+        programs.compile("environment_model", "environment_model", Link::Shared);
         if slow_checks_enabled() {
             programs.compile("error_paths", "error_paths_asan", Link::SharedSanitized);
             programs.compile("threads", "threads_asan", Link::SharedSanitized);
@@ -281,6 +285,17 @@ fn c_threads_render_identical_images_and_keep_their_errors_apart() {
     let programs = Programs::get();
     let output = run(&mut programs.command("threads"));
     assert_all_checks_passed("threads", &output);
+}
+
+/// The environment model from C: `SHIKKI_ENV_MODEL_BRDF` renders a 32 × 32 sphere differently
+/// from `SHIKKI_ENV_MODEL_PAPER` (and switching back gives PAPER's bytes again), a scene TOML's
+/// `[render] environment_model = "brdf"` renders like the call-built BRDF scene, and an unknown
+/// model number is `INVALID_ARGUMENT` naming the valid values, leaving the scene unchanged.
+#[test]
+fn c_environment_model_brdf_differs_from_paper_and_bad_numbers_are_refused() {
+    let programs = Programs::get();
+    let output = run(&mut programs.command("environment_model"));
+    assert_all_checks_passed("environment_model", &output);
 }
 
 /// The built-in studio map upsampled 8× by pixel replication to 8192 × 4096 and written as a

@@ -32,20 +32,12 @@ float layer_log_beta(int k) {
     return frame.layer_log_beta[k / 4][k % 4];
 }
 
-// Lpre(dir, β) of SPEC §4 from the layers: linear in β between layers 0 and 1, linear in log β
-// above, the last layer beyond β_max. Twin of environment::params::layer_blend.
-//
-// Why a weighted sum over all K layers instead of sampling the two that matter: the pair differs
-// between fragments, and indexing a sampler array with anything but a constant needs
-// shaderSampledImageArrayDynamicIndexing, which lavapipe does not have (so not even a dynamically
-// uniform loop index is allowed). A `switch` over the layer index would run every case under a
-// lane mask (quirk `loop_body_runs_when_no_lane_enters`); this does K lookups, each at a constant
-// index. Exact: the weights are (1 − t, t) on layers (k0, k0 + 1) and 0 elsewhere, so the sum is
-// mix(L_k0, L_k0+1, t) plus exact zeros.
-vec3 prefiltered_radiance(vec3 dir, float beta) {
+// The layers SPEC §4's Lpre(·, β) blends: mix(L_k0, L_k0+1, t), linear in β between layers 0 and
+// 1, linear in log β above, the last layer beyond β_max. Twin of environment::params::layer_blend.
+void layer_pair(float beta, out int k0, out float t) {
     int count = ENV_LAYER_COUNT;
-    int k0 = 0;
-    float t = 0.0;
+    k0 = 0;
+    t = 0.0;
     if (count > 1 && beta > 0.0) {
         float beta1 = layer_beta(1);
         if (beta < beta1) {
@@ -69,6 +61,21 @@ vec3 prefiltered_radiance(vec3 dir, float beta) {
             }
         }
     }
+}
+
+// Lpre(dir, β) of SPEC §4 from the layers (`layer_pair`), with the sampler's filtering.
+//
+// Why a weighted sum over all K layers instead of sampling the two that matter: the pair differs
+// between fragments, and indexing a sampler array with anything but a constant needs
+// shaderSampledImageArrayDynamicIndexing, which lavapipe does not have (so not even a dynamically
+// uniform loop index is allowed). A `switch` over the layer index would run every case under a
+// lane mask (quirk `loop_body_runs_when_no_lane_enters`); this does K lookups, each at a constant
+// index. Exact: the weights are (1 − t, t) on layers (k0, k0 + 1) and 0 elsewhere, so the sum is
+// mix(L_k0, L_k0+1, t) plus exact zeros.
+vec3 prefiltered_radiance(vec3 dir, float beta) {
+    int k0;
+    float t;
+    layer_pair(beta, k0, t);
     vec3 sum = vec3(0.0);
 #if MAX_ENV_LAYERS != 16
 #error "prefiltered_radiance adds layers 0..15: list one ADD_LAYER per layer below"

@@ -30,6 +30,7 @@ struct LacquerParams {
     vec3 albedo;       // k_d
     int fresnel_first; // index of the table's first knot in fresnel_knots (tables are concatenated)
     int fresnel_count; // number of knots
+    int albedo_first;  // index of the first A(nv) knot in fresnel_knots (the `brdf` model)
 };
 
 // The BRDF's parameters of an object's material: the one unpacking of ObjectMaterial.
@@ -43,6 +44,7 @@ LacquerParams lacquer_params(ObjectMaterial m) {
     p.lacquer_g = m.lacquer_g;
     p.albedo = m.albedo;
     p.fresnel_first = int(m.fresnel_first);
+    p.albedo_first = int(m.albedo_first);
     p.fresnel_count = int(m.fresnel_count);
     return p;
 }

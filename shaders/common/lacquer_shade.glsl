@@ -1,11 +1,17 @@
 // Radiance leaving a lacquer surface point towards the camera: Σ over lights of f_r · E · (N·L)
-// (SPEC §2, §4) plus the environment term
-// L_env = F(acos nv)·Lpre(R, β(nv)) + k_d·max(a + b·nv, 0)·g(r)·E_irr(N)/π (SPEC §4).
+// (SPEC §2, §4) plus the environment term of the pipeline's model (ENV_MODEL, SPEC §4):
+// `paper`: L_env = F(acos nv)·Lpre(R, β(nv)) + k_d·max(a + b·nv, 0)·g(r)·E_irr(N)/π;
+// `brdf`: the same diffuse half, and the specular integral of brdf_environment.glsl.
 //
 // The includer includes frame.glsl and lacquer_brdf.glsl first.
 
 #ifndef LACQUER_SHADE_GLSL
 #define LACQUER_SHADE_GLSL
+
+#include "brdf_environment.glsl"
+
+// A constant, so a pipeline compiles only its model's code.
+layout(constant_id = ENV_MODEL_ID) const int ENV_MODEL = ENV_MODEL_PAPER;
 
 // view_blur: (β_normal, β_grazing, p) of SPEC §4's β(nv), per material; nv2 = dot_compensated(n, v)
 // and f_diff = view_dependent_diffuse(p, nv2), shared with the lights.
@@ -14,10 +20,15 @@ vec3 environment_light(LacquerParams p, vec3 view_blur, vec3 n, vec3 v, vec2 nv2
     if (nv <= 0.0) {
         return vec3(0.0);
     }
-    vec3 r = 2.0 * nv * n - v;
-    float beta = view_blur.y + (view_blur.x - view_blur.y) * pow(min(nv, 1.0), view_blur.z);
-    vec3 specular = fresnel_table(angle_deg_of_cos(nv), p.fresnel_first, p.fresnel_count)
-        * prefiltered_radiance(r, beta);
+    vec3 specular;
+    if (ENV_MODEL == ENV_MODEL_BRDF) {
+        specular = brdf_environment_specular(p, n, v, nv);
+    } else {
+        vec3 r = 2.0 * nv * n - v;
+        float beta = view_blur.y + (view_blur.x - view_blur.y) * pow(min(nv, 1.0), view_blur.z);
+        specular = fresnel_table(angle_deg_of_cos(nv), p.fresnel_first, p.fresnel_count)
+            * prefiltered_radiance(r, beta);
+    }
     vec3 irradiance = textureLod(env_irradiance, n, 0.0).rgb;
     return specular + f_diff * irradiance;
 }

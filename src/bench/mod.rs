@@ -236,6 +236,7 @@ pub fn run(
     let mut targets = Vec::new();
     if let Some(r) = &render {
         targets.push(r.target.clone());
+        targets.push(r.models.target.clone());
     }
     if let Some(p) = &prefilter {
         targets.push(p.speedup_target.clone());

@@ -7,6 +7,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use super::{BenchConfig, Stat, Target};
+use crate::environment::EnvironmentModel;
 use crate::gpu::GpuContext;
 use crate::model::LacquerMaterial;
 use crate::raster::draw::{Background, DrawOptions, MeshShading};
@@ -17,6 +18,21 @@ use crate::Result;
 /// The target (BENCHMARKS.md, "Targets"): lacquer draw ≤ 2 × the trivial draw of the same
 /// geometry.
 pub const RATIO_LIMIT: f64 = 2.0;
+
+/// The target of issue 16: the `brdf` environment model's draw ≤ 1.5 × the `paper` model's, on
+/// the default scene.
+pub const BRDF_MODEL_LIMIT: f64 = 1.5;
+
+/// The default scene drawn in both environment models, interleaved (GPU time of the draw).
+#[derive(Clone, Debug, Serialize)]
+pub struct ModelBench {
+    pub width: u32,
+    pub paper_gpu: Stat,
+    pub brdf_gpu: Stat,
+    /// brdf_gpu.median / paper_gpu.median.
+    pub ratio: f64,
+    pub target: Target,
+}
 
 #[derive(Clone, Debug, Serialize)]
 pub struct RenderBench {
@@ -36,6 +52,8 @@ pub struct RenderBench {
     /// lacquer_gpu.median / trivial_gpu.median.
     pub ratio: f64,
     pub target: Target,
+    /// The default scene in the `paper` and `brdf` environment models.
+    pub models: ModelBench,
 }
 
 /// The bowl scene of the render benchmark at `size`² (also used by the batch benchmark).
@@ -54,6 +72,7 @@ pub fn bowl_scene(size: u32, samples: u32, background: Background) -> Result<Sce
         }],
         lights: default_lights(),
         environment: EnvironmentSpec::named(crate::environment::load::BUILTIN_STUDIO),
+        render: Default::default(),
         output: OutputSpec {
             width: size,
             height: size,
@@ -105,6 +124,7 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<RenderBench> {
     }
     let (lacquer, trivial) = (Stat::of(lacquer), Stat::of(trivial));
     let ratio = lacquer.median / trivial.median;
+    let models = models(gpu, &mut renderer, config)?;
     Ok(RenderBench {
         width: config.render_size,
         height: config.render_size,
@@ -120,6 +140,50 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<RenderBench> {
             "render: lacquer draw / trivial-shader draw",
             ratio,
             RATIO_LIMIT,
+        ),
+        models,
+    })
+}
+
+/// The default scene at the render size in each environment model, interleaved; run 0 warms up.
+fn models(
+    gpu: &GpuContext,
+    renderer: &mut SceneRenderer,
+    config: &BenchConfig,
+) -> Result<ModelBench> {
+    let mut scene = crate::scene::default_scene();
+    scene.output.width = config.render_size;
+    scene.output.height = config.render_size;
+    let (mut paper, mut brdf) = (Vec::new(), Vec::new());
+    for run in 0..=config.runs {
+        for model in EnvironmentModel::ALL {
+            scene.render.environment_model = model;
+            let options = DrawOptions {
+                shading: MeshShading::Lacquer,
+                timed: true,
+            };
+            let (_, timings) = renderer.render_with(gpu, &scene, options)?;
+            let Some(t) = timings else { continue };
+            if run == 0 {
+                continue;
+            }
+            match model {
+                EnvironmentModel::Paper => paper.push(t.pass),
+                EnvironmentModel::Brdf => brdf.push(t.pass),
+            }
+        }
+    }
+    let (paper, brdf) = (Stat::of(paper), Stat::of(brdf));
+    let ratio = brdf.median / paper.median;
+    Ok(ModelBench {
+        width: config.render_size,
+        paper_gpu: paper,
+        brdf_gpu: brdf,
+        ratio,
+        target: Target::at_most(
+            "render: brdf environment model / paper model, default scene",
+            ratio,
+            BRDF_MODEL_LIMIT,
         ),
     })
 }

@@ -61,6 +61,20 @@ pub fn markdown(report: &BenchReport) -> String {
             "copy-out to readback (GPU)".into(),
             &render.copy_out_gpu,
         );
+        let m = &render.models;
+        row(
+            "render",
+            format!(
+                "default scene {}², `paper` environment model (GPU)",
+                m.width
+            ),
+            &m.paper_gpu,
+        );
+        row(
+            "render",
+            "same, `brdf` environment model (GPU)".into(),
+            &m.brdf_gpu,
+        );
     }
     if let Some(p) = &r.prefilter {
         row(

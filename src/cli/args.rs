@@ -3,6 +3,7 @@
 //! types and constants.
 
 use crate::bench::Stage;
+use crate::environment::EnvironmentModel;
 use crate::output::ToneCurve;
 use crate::raster::draw::Background;
 use crate::raster::mesh::{BuiltinMesh, BUILTIN_SEGMENTS};
@@ -130,6 +131,11 @@ pub struct RenderArgs {
     /// transparent, or a linear colour r,g,b.
     #[arg(long, default_value = "env", value_parser = parse_background)]
     pub background: Background,
+    /// How the environment lights the objects (SPEC §4): paper (the paper's multi-layer cube,
+    /// the default) or brdf (the integral of the BRDF itself, what a path tracer converges to).
+    /// With a scene file it overrides `[render] environment_model`.
+    #[arg(long = "env-model", value_parser = parse_env_model)]
+    pub env_model: Option<EnvironmentModel>,
 }
 
 /// The environment light (SPEC §4).
@@ -301,6 +307,7 @@ impl Default for RenderArgs {
                     rotation_deg: 0.0,
                 },
                 background: Background::Environment,
+                env_model: None,
             },
         }
     }
@@ -343,6 +350,15 @@ pub fn parse_background(s: &str) -> std::result::Result<Background, String> {
             Ok(Background::Color([c.x as f32, c.y as f32, c.z as f32]))
         }
     }
+}
+
+fn parse_env_model(s: &str) -> std::result::Result<EnvironmentModel, String> {
+    EnvironmentModel::from_name(s).ok_or_else(|| {
+        format!(
+            "environment model {s:?}: must be {}",
+            EnvironmentModel::choices()
+        )
+    })
 }
 
 fn parse_tone_curve(s: &str) -> std::result::Result<ToneCurve, String> {

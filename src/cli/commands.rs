@@ -14,7 +14,7 @@ use crate::output::{self, PngSettings};
 use crate::raster::camera::Camera;
 use crate::raster::lights::{default_lights, Light, MAX_LIGHTS};
 use crate::raster::mesh::BuiltinMesh;
-use crate::scene::{EnvironmentSpec, MeshSource, OutputSpec, Scene, SceneObject};
+use crate::scene::{EnvironmentSpec, MeshSource, OutputSpec, RenderSpec, Scene, SceneObject};
 use crate::{Error, Result, Warning};
 use glam::{DMat4, DVec3};
 use std::io::Write;
@@ -23,7 +23,14 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         None => scene_cmd::render_default(&RenderArgs::default()),
         Some(Command::Render(args)) => match &args.scene {
-            Some(path) => scene_cmd::render_scene_file(path, &args.material.set, &args.output),
+            Some(path) => {
+                // --env-model is the scene path render.environment_model.
+                let mut sets = args.material.set.clone();
+                if let Some(model) = args.env_model {
+                    sets.push(format!("render.environment_model={}", model.name()));
+                }
+                scene_cmd::render_scene_file(path, &sets, &args.output)
+            }
             None if scene_cmd::wants_default_scene(&args) => scene_cmd::render_default(&args),
             None => render(args),
         },
@@ -170,6 +177,9 @@ fn scene_from_flags(args: &RenderArgs) -> Result<Scene> {
         }],
         lights,
         environment: environment_from_flags(&args.environment),
+        render: RenderSpec {
+            environment_model: args.env_model.unwrap_or_default(),
+        },
         output: OutputSpec {
             width: args.size.0,
             height: args.size.1,

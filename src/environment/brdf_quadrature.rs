@@ -1,36 +1,87 @@
-//! SPEC §4's `brdf` environment model as a fixed quadrature on the CPU: the algorithm the shade
-//! pass is to run, and its twin. The specular integral ∫ f_spec·L·(N·s) dω is estimated with
-//! the same `samples` points for every pixel (a Hammersley set: no noise, no per-pixel random
-//! numbers), each a half vector drawn from the Beckmann lobe, so the weight of the reflected
-//! direction s is F·G·(V·H)/(nv·nh). Each s reads the prefiltered layers at the blur whose lobe
-//! covers the sample's share of the hemisphere, 1/(samples·pdf(s)) (filtered importance
-//! sampling, Křivánek & Colbert, GPU Gems 3 ch. 20), which is what keeps a sharp layer from
-//! aliasing. `brdf_definition.rs` is the brute-force ground truth it must converge to.
+//! SPEC §4's `brdf` environment model as a fixed quadrature on the CPU: the twin of the shader's
+//! (shaders/common/brdf_environment.glsl), formula by formula, in f64. The specular integral
+//! ∫ f_spec·L·(N·s) dω is estimated with the same `samples` points for every pixel (a Hammersley
+//! set: no noise, no per-pixel random numbers), each a half vector drawn from the Beckmann lobe,
+//! so the weight of the reflected direction s is F·G·(V·H)/(nv·nh). Each s reads the prefiltered
+//! layers at the blur whose lobe covers the sample's share of the sphere, 1/(samples·pdf(s))
+//! (filtered importance sampling, Křivánek & Colbert, GPU Gems 3 ch. 20), which is what keeps a
+//! sharp layer from aliasing. The lookups are bilinear over texel centres with one seam rule: a
+//! tap beyond its face reads the texel holding the tap's direction on the face that direction
+//! selects. `brdf_definition.rs` is the brute-force ground truth it converges to.
 
 use glam::DVec3;
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::PI;
 
+use super::brdf_definition::specular_albedo;
 use super::cube::{direction_to_face, face_direction};
 use super::image::{CubeImage, PrefilteredEnvironment};
 use super::params::layer_blend;
-use crate::model::brdf::{beckmann_d, cook_torrance_g};
+use crate::gpu::shaders::interface::ALBEDO_KNOTS;
+use crate::model::brdf::cook_torrance_g;
 use crate::model::{BrdfParams, FresnelTable};
 
-/// How the quadrature is run.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BrdfQuadrature {
-    /// Half vectors per shaded point.
-    pub samples: u32,
-    /// Lobe solid angle of a lookup over the sample's share 1/(samples·pdf): > 1 blurs more.
-    pub footprint: f64,
+/// Lobe samples per shaded point in the renderer (the shaders' `ENV_SAMPLES`): the cost and
+/// accuracy are measured in BENCHMARKS.md ("The `brdf` environment model").
+pub const BRDF_SAMPLES: u32 = 32;
+
+/// The specular directional albedo A(nv) = ∫ f_spec·(N·s) dω_s of a material at the
+/// `ALBEDO_KNOTS` knots nv = (k/(ALBEDO_KNOTS − 1))², as the shaders read them: (nv, A_r, A_g,
+/// A_b). The knots crowd towards grazing, where A changes fastest.
+/// The quadrature is normalised by it (see [`specular_quadrature`]); computed with
+/// `brdf_definition::specular_albedo` at 256 × 64 half vectors (within 1e-4 of 2048 × 256, which
+/// agrees with the brute force to 5e-6).
+pub fn albedo_knots(brdf: &BrdfParams, fresnel: &FresnelTable) -> Vec<[f32; 4]> {
+    let last = (ALBEDO_KNOTS - 1) as f64;
+    (0..ALBEDO_KNOTS)
+        .map(|k| {
+            let nv = (k as f64 / last).powi(2);
+            let a = specular_albedo(brdf, fresnel, nv, 256, 64);
+            [nv as f32, a[0] as f32, a[1] as f32, a[2] as f32]
+        })
+        .collect()
 }
 
-impl Default for BrdfQuadrature {
-    fn default() -> Self {
-        Self {
-            samples: 32,
-            footprint: 1.0,
+/// A(nv) from [`albedo_knots`], linear in √nv between knots (twin of brdf_environment.glsl's
+/// `albedo_at`).
+pub fn albedo_at(knots: &[[f32; 4]], nv: f64) -> [f64; 3] {
+    let last = knots.len().saturating_sub(1);
+    if last == 0 {
+        return [0.0; 3];
+    }
+    let x = nv.clamp(0.0, 1.0).sqrt() * last as f64;
+    let k = (x.floor() as usize).min(last - 1);
+    let t = x - k as f64;
+    std::array::from_fn(|c| {
+        let (a, b) = (f64::from(knots[k][c + 1]), f64::from(knots[k + 1][c + 1]));
+        a + (b - a) * t
+    })
+}
+
+/// Albedo knots per material, kept by the renderer: only m and the Fresnel table change them,
+/// and computing them (~1 M BRDF evaluations) costs more than a small render.
+#[derive(Default)]
+pub struct AlbedoCache {
+    entries: Vec<(Vec<u64>, Vec<[f32; 4]>)>,
+}
+
+impl AlbedoCache {
+    /// Distinct materials kept; the oldest goes first.
+    const CAPACITY: usize = 64;
+
+    pub fn knots(&mut self, brdf: &BrdfParams, fresnel: &FresnelTable) -> Vec<[f32; 4]> {
+        let key: Vec<u64> = std::iter::once(brdf.beckmann_m.to_bits())
+            .chain(fresnel.angles_deg().iter().map(|a| a.to_bits()))
+            .chain(fresnel.rgb().iter().flat_map(|c| c.map(f64::to_bits)))
+            .collect();
+        if let Some((_, knots)) = self.entries.iter().find(|(k, _)| *k == key) {
+            return knots.clone();
         }
+        let knots = albedo_knots(brdf, fresnel);
+        if self.entries.len() >= Self::CAPACITY {
+            self.entries.remove(0);
+        }
+        self.entries.push((key, knots.clone()));
+        knots
     }
 }
 
@@ -41,13 +92,16 @@ pub fn hammersley(i: u32, n: u32) -> (f64, f64) {
     (u, v)
 }
 
-/// The specular part of the `brdf` model at a surface point (unit `n`, `v`, world frame; the
-/// cubes are in the world frame already, rotated and scaled by the prefilter).
+/// The specular part of the `brdf` model at a surface point with `samples` lobe samples (unit
+/// `n`, `v`, world frame; the cubes are in the world frame already, rotated and scaled by the
+/// prefilter), `albedo` the material's [`albedo_knots`]. The weighted mean of the lookups is
+/// scaled by A(nv), Σ w·L / Σ w · A(nv) per channel: a ratio estimator, exact in a white furnace
+/// at every nv (the plain mean misses A by up to 11 % at grazing, where the lobe samples meet the
+/// horizon unevenly).
 pub fn specular_quadrature(
     env: &PrefilteredEnvironment,
-    quadrature: &BrdfQuadrature,
-    brdf: &BrdfParams,
-    fresnel: &FresnelTable,
+    samples: u32,
+    (brdf, fresnel, albedo): (&BrdfParams, &FresnelTable, &[[f32; 4]]),
     n: DVec3,
     v: DVec3,
 ) -> [f64; 3] {
@@ -58,88 +112,86 @@ pub fn specular_quadrature(
     // The frame's first axis lies in the plane of incidence, so the pattern is symmetric about
     // it and moves continuously with V (any axis at normal incidence).
     let along = v - nv * n;
+    let other = if n.x.abs() < 0.5 { DVec3::X } else { DVec3::Y };
     let tangent = if along.length_squared() > 1e-12 {
         along.normalize()
     } else {
-        n.any_orthonormal_vector()
+        n.cross(other).normalize()
     };
     let bitangent = n.cross(tangent);
-    let m = brdf.beckmann_m;
-    let count = quadrature.samples.max(1);
+    let m2 = brdf.beckmann_m * brdf.beckmann_m;
+    let count = samples.max(1);
     let mut sum = [0.0; 3];
+    let mut weights = [0.0; 3];
     for i in 0..count {
         let (u, w) = hammersley(i, count);
-        let tan2 = -m * m * (-u).ln_1p();
+        // u = 1 − exp(−tan²θ_H/m²): the Beckmann lobe's distribution of D·cos θ_H.
+        let rest = 1.0 - u;
+        let tan2 = -m2 * rest.ln();
         let cos_h = 1.0 / (1.0 + tan2).sqrt();
-        let sin_h = (tan2 / (1.0 + tan2)).sqrt();
-        let (sin_phi, cos_phi) = (TAU * w).sin_cos();
+        let sin_h = tan2.sqrt() * cos_h;
+        let (sin_phi, cos_phi) = (2.0 * PI * w).sin_cos();
         let h = tangent * (sin_h * cos_phi) + bitangent * (sin_h * sin_phi) + n * cos_h;
         let vh = v.dot(h);
-        if vh <= 0.0 {
-            continue;
-        }
         let s = 2.0 * vh * h - v;
         let nl = n.dot(s);
-        if nl <= 0.0 {
-            continue;
-        }
-        let g = cook_torrance_g(cos_h, nv, nl, vh);
-        let f = fresnel.eval(vh.min(1.0).acos().to_degrees());
-        let weight = g * vh / (nv * cos_h);
-        // pdf of s: D·nh/(4·vh); the sample's share of the sphere is 1/(count·pdf).
-        let pdf = beckmann_d(cos_h, m) * cos_h / (4.0 * vh);
-        let share = quadrature.footprint / (f64::from(count) * pdf);
-        let radiance = prefiltered_radiance(env, s, lobe_beta(share));
-        for c in 0..3 {
-            sum[c] += f[c] * weight * radiance[c];
+        if vh > 0.0 && nl > 0.0 {
+            let g = cook_torrance_g(cos_h, nv, nl, vh);
+            let f = fresnel.eval(vh.min(1.0).acos().to_degrees());
+            // pdf(s) = D·cos θ_H/(4·V·H) with D = (1 − u)/(π m² cos⁴θ_H); the lookup's lobe
+            // 2πβ² covers 1/(samples·pdf).
+            let pdf = rest / (4.0 * PI * m2 * cos_h * cos_h * cos_h * vh);
+            let beta = (1.0 / (2.0 * PI * f64::from(count) * pdf)).sqrt();
+            let weight = g * vh / (nv * cos_h);
+            let radiance = layered_radiance(env, s, beta);
+            for c in 0..3 {
+                sum[c] += f[c] * weight * radiance[c];
+                weights[c] += f[c] * weight;
+            }
         }
     }
-    sum.map(|x| x / f64::from(count))
-}
-
-/// The β whose lobe w_β(c) = exp((c − 1)/β²) covers `solid_angle`: its integral over the sphere
-/// is 2πβ²·(1 − e^(−2/β²)), ≈ 2πβ² for the narrow lobes where the choice matters.
-pub fn lobe_beta(solid_angle: f64) -> f64 {
-    (solid_angle / (2.0 * PI)).sqrt()
+    let a = albedo_at(albedo, nv);
+    std::array::from_fn(|c| match weights[c] > 0.0 {
+        true => sum[c] / weights[c] * a[c],
+        false => 0.0,
+    })
 }
 
 /// Lpre(d, β) from the layers (SPEC §4: linear in β between layers 0 and 1, in log β above),
-/// each layer read bilinearly.
-pub fn prefiltered_radiance(env: &PrefilteredEnvironment, d: DVec3, beta: f64) -> [f64; 3] {
+/// each layer read by [`cube_bilinear`].
+pub fn layered_radiance(env: &PrefilteredEnvironment, d: DVec3, beta: f64) -> [f64; 3] {
     let (k, t) = layer_blend(&env.betas, beta);
     let lo = cube_bilinear(&env.layers[k], d);
-    if t == 0.0 || k + 1 >= env.layers.len() {
+    if t == 0.0 {
         return lo;
     }
-    let hi = cube_bilinear(&env.layers[k + 1], d);
+    let hi = cube_bilinear(&env.layers[(k + 1).min(env.layers.len() - 1)], d);
     std::array::from_fn(|c| lo[c] + (hi[c] - lo[c]) * t)
 }
 
-/// Bilinear filtering of a cube at `d` across face edges: a tap beyond its face reads the texel
-/// whose centre holds the tap's direction on the neighbouring face.
-pub fn cube_bilinear(cube: &CubeImage, d: DVec3) -> [f64; 3] {
+/// The texel of `cube` holding direction `d`.
+fn cube_texel(cube: &CubeImage, d: DVec3) -> [f64; 3] {
     let size = cube.face_size;
     let (face, sc, tc) = direction_to_face(d);
-    let x = (sc + 1.0) / 2.0 * f64::from(size) - 0.5;
-    let y = (tc + 1.0) / 2.0 * f64::from(size) - 0.5;
+    let index = |c: f64| {
+        (((c + 1.0) * 0.5 * f64::from(size)).floor() as i64).clamp(0, i64::from(size) - 1) as u32
+    };
+    let texel = cube.get(face, index(sc), index(tc));
+    [texel[0], texel[1], texel[2]].map(f64::from)
+}
+
+/// Bilinear filtering of a cube at `d` over the four texel centres around it; each tap is looked
+/// up by its direction (inside the face that is the texel itself; beyond an edge, the texel of the
+/// neighbouring face holding the tap's direction).
+pub fn cube_bilinear(cube: &CubeImage, d: DVec3) -> [f64; 3] {
+    let size = f64::from(cube.face_size);
+    let (face, sc, tc) = direction_to_face(d);
+    let x = (sc + 1.0) * 0.5 * size - 0.5;
+    let y = (tc + 1.0) * 0.5 * size - 0.5;
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
-    let tap = |i: f64, j: f64| -> [f64; 3] {
-        let inside = |k: f64| k >= 0.0 && k < f64::from(size);
-        let (f, i, j) = if inside(i) && inside(j) {
-            (face, i as u32, j as u32)
-        } else {
-            let coord = |k: f64| 2.0 * (k + 0.5) / f64::from(size) - 1.0;
-            let (f, s, t) = direction_to_face(face_direction(face, coord(i), coord(j)));
-            let index = |c: f64| {
-                (((c + 1.0) / 2.0 * f64::from(size)).floor() as i64).clamp(0, i64::from(size) - 1)
-                    as u32
-            };
-            (f, index(s), index(t))
-        };
-        let texel = cube.get(f, i, j);
-        [texel[0], texel[1], texel[2]].map(f64::from)
-    };
+    let coord = |k: f64| 2.0 * (k + 0.5) / size - 1.0;
+    let tap = |i: f64, j: f64| cube_texel(cube, face_direction(face, coord(i), coord(j)));
     let (a, b) = (tap(x0, y0), tap(x0 + 1.0, y0));
     let (c, e) = (tap(x0, y0 + 1.0), tap(x0 + 1.0, y0 + 1.0));
     std::array::from_fn(|k| {

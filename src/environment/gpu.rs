@@ -21,8 +21,8 @@ use crate::gpu::shaders::interface::{
     NEAR_TEXELS_BINDING, PREFILTER_DEST_BINDING, PREFILTER_SOURCE_BINDING, PREFILTER_WORKGROUP,
 };
 use crate::gpu::{
-    Access, AdapterInfo, Binding, BindingKind, Buffer, BufferDesc, ComputePipeline, DescriptorSet,
-    GpuContext, Image, ImageUsage, ImageUse, Layout, Recorder,
+    Access, AdapterInfo, Binding, BindingKind, Buffer, BufferDesc, BufferUsage, ComputePipeline,
+    DescriptorSet, GpuContext, Image, ImageUsage, ImageUse, Layout, Recorder,
 };
 use crate::{Error, Result};
 use std::mem::{offset_of, size_of};
@@ -82,6 +82,24 @@ pub struct GpuEnvironment {
     pub betas: Vec<f64>,
     pub layers: Vec<Image>,
     pub irradiance: Image,
+    /// Every layer's texels in one texel buffer (the `brdf` model's lookups), made by the first
+    /// draw that needs it: [`GpuEnvironment::layer_texels`].
+    layer_texels: std::sync::OnceLock<Buffer>,
+}
+
+/// The index of each layer's first texel when the layers of `faces` are stored one after the
+/// other, 6·M² texels each (what `ENV_LAYER_TEXELS_BINDING` holds), and the total.
+pub fn layer_texel_offsets(faces: impl IntoIterator<Item = u32>) -> (Vec<u64>, u64) {
+    let mut next = 0;
+    let offsets = faces
+        .into_iter()
+        .map(|face| {
+            let first = next;
+            next += 6 * u64::from(face) * u64::from(face);
+            first
+        })
+        .collect();
+    (offsets, next)
 }
 
 /// What the sampled cube images are used for: sampled by the draws, filled by a copy, copied back
@@ -97,6 +115,69 @@ fn cube_bytes(face: u32) -> u64 {
 /// Workgroups along each side of a face: one per `PREFILTER_WORKGROUP`² tile.
 fn groups(face: u32) -> u32 {
     face.div_ceil(PREFILTER_WORKGROUP)
+}
+
+impl GpuEnvironment {
+    /// The environment as the prefilter or an upload leaves it (no texel copy yet).
+    pub(crate) fn new(betas: Vec<f64>, layers: Vec<Image>, irradiance: Image) -> Self {
+        Self {
+            betas,
+            layers,
+            irradiance,
+            layer_texels: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// Face size of each layer.
+    pub fn layer_faces(&self) -> Vec<u32> {
+        self.layers.iter().map(|image| image.desc().width).collect()
+    }
+
+    /// The layers' texels concatenated in one device-local texel buffer (layer k from
+    /// `layer_texel_offsets(layer_faces())[k]`), copied from the images on first use and kept.
+    /// Refused when the device's texel buffers cannot hold them all.
+    pub fn layer_texels(&self, gpu: &GpuContext) -> Result<&Buffer> {
+        if let Some(buffer) = self.layer_texels.get() {
+            return Ok(buffer);
+        }
+        let (offsets, total) = layer_texel_offsets(self.layer_faces());
+        let limit = u64::from(gpu.info().max_texel_buffer_elements).min(i32::MAX as u64);
+        if total > limit {
+            return Err(Error::invalid(
+                "environment_model",
+                "brdf",
+                format!(
+                    "the `brdf` model reads the environment's {total} layer texels from one \
+                     texel buffer, and this device holds at most {limit}; use a smaller \
+                     environment face size, or the `paper` model"
+                ),
+            ));
+        }
+        let buffer = gpu.create_buffer(BufferDesc::device_local(
+            "environment layer texels",
+            total * 16,
+            BufferUsage::UNIFORM_TEXEL | BufferUsage::TRANSFER_DST,
+        ))?;
+        let sampled = ImageUse::new(Access::GraphicsShaderRead, Layout::ShaderRead);
+        let transfer_src = ImageUse::new(Access::TransferRead, Layout::TransferSrc);
+        gpu.submit_and_wait(|rec| {
+            for (image, &first) in self.layers.iter().zip(&offsets) {
+                // Draws may have sampled the image; it goes back to being sampled after.
+                rec.image_barrier(image, sampled, transfer_src);
+                rec.copy_image_rows_to_buffer(image, image.desc().height, &buffer, first * 16);
+                rec.image_barrier(image, transfer_src, sampled);
+            }
+            // The draws (and the compute evaluator) that read the buffer are later submits; the
+            // barriers make the copy's writes visible to their shaders.
+            rec.memory_barrier(Access::TransferWrite, Access::GraphicsShaderRead);
+            rec.memory_barrier(Access::TransferWrite, Access::ComputeShaderRead);
+            Ok(())
+        })?;
+        let _ = self.layer_texels.set(buffer);
+        self.layer_texels
+            .get()
+            .ok_or_else(|| Error::Internal("the layer texel buffer was not kept".into()))
+    }
 }
 
 impl GpuPrefilter {
@@ -221,11 +302,8 @@ impl GpuPrefilter {
             irradiance: span(2 + blurred, 3 + blurred),
             copy_to_images: span(3 + blurred, 4 + blurred),
         };
-        let env = GpuEnvironment {
-            betas: params.plan().iter().map(|l| l.beta).collect(),
-            layers: run.images,
-            irradiance: run.irradiance_image,
-        };
+        let betas = params.plan().iter().map(|l| l.beta).collect();
+        let env = GpuEnvironment::new(betas, run.images, run.irradiance_image);
         Ok((env, timings))
     }
 

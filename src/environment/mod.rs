@@ -30,5 +30,5 @@ pub mod preview;
 pub use image::{CubeImage, Equirect, PrefilteredEnvironment};
 pub use load::{load_environment, LoadedEnvironment};
 pub use oracle::prefilter_cpu;
-pub use params::{EnvironmentLight, LayerPlan, PrefilterParams};
+pub use params::{EnvironmentLight, EnvironmentModel, LayerPlan, PrefilterParams};
 pub use prepare::{EnvironmentPreparer, EnvironmentSource};

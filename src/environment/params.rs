@@ -151,6 +151,41 @@ impl PrefilterParams {
     }
 }
 
+/// SPEC §4's environment models: `paper`, the paper's multi-layer cube picked by β(nv) (the
+/// default), or `brdf`, the integral of §2's BRDF itself by a fixed quadrature
+/// (`brdf_quadrature.rs` and its shader twin brdf_environment.glsl).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum EnvironmentModel {
+    #[default]
+    Paper,
+    Brdf,
+}
+
+impl EnvironmentModel {
+    pub const ALL: [EnvironmentModel; 2] = [EnvironmentModel::Paper, EnvironmentModel::Brdf];
+
+    /// The name scene files, the CLI and the C API use.
+    pub fn name(self) -> &'static str {
+        match self {
+            EnvironmentModel::Paper => "paper",
+            EnvironmentModel::Brdf => "brdf",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// "`paper` or `brdf`", for error messages.
+    pub fn choices() -> String {
+        let names: Vec<String> = Self::ALL
+            .iter()
+            .map(|m| format!("`{}`", m.name()))
+            .collect();
+        names.join(" or ")
+    }
+}
+
 /// How an environment map lights the world (SPEC §4): its radiance × `intensity`, turned by
 /// `rotation_deg` about +Y. Applied when the map is resampled to the cube, so both are part of a
 /// prefiltered environment's identity (its cache key) although they change none of the plan.

@@ -20,7 +20,7 @@ use std::sync::Arc;
 
 use glam::{DMat4, DVec3};
 
-pub use crate::environment::{EnvironmentLight, EnvironmentSource};
+pub use crate::environment::{EnvironmentLight, EnvironmentModel, EnvironmentSource};
 use crate::model::LacquerMaterial;
 pub use crate::output::ToneCurve;
 pub use crate::raster::draw::Background;
@@ -38,6 +38,7 @@ pub struct Scene {
     pub objects: Vec<SceneObject>,
     pub lights: Vec<Light>,
     pub environment: EnvironmentSpec,
+    pub render: RenderSpec,
     pub output: OutputSpec,
 }
 
@@ -105,9 +106,16 @@ impl Default for Scene {
             objects: Vec::new(),
             lights: Vec::new(),
             environment: EnvironmentSpec::None,
+            render: RenderSpec::default(),
             output: OutputSpec::default(),
         }
     }
+}
+
+/// How light is computed (`[render]`): SPEC §4's environment model.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RenderSpec {
+    pub environment_model: EnvironmentModel,
 }
 
 /// Image size, anti-aliasing and the PNG conversion (SPEC §1).
@@ -171,6 +179,7 @@ fn fallback_default_scene() -> Scene {
         objects: vec![bowl(-1.1, "smooth-red"), bowl(1.1, "smooth-black")],
         lights: crate::raster::default_lights(),
         environment: EnvironmentSpec::named(crate::environment::load::BUILTIN_STUDIO),
+        render: RenderSpec::default(),
         output: OutputSpec::default(),
     }
 }

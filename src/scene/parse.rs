@@ -12,8 +12,8 @@ use std::sync::{Arc, Mutex, OnceLock};
 use glam::{DMat4, DQuat, DVec3, EulerRot};
 
 use super::doc::{self, Entry, Node, Origin, Value};
-use super::sections::{environment, light, output};
-use super::{EnvironmentSpec, MeshSource, OutputSpec, Scene, SceneObject};
+use super::sections::{environment, light, output, render};
+use super::{EnvironmentSpec, MeshSource, OutputSpec, RenderSpec, Scene, SceneObject};
 use crate::environment::load::BUILTIN_STUDIO;
 use crate::model::fresnel::FresnelTable;
 use crate::model::material::{MaterialValue, MATERIAL_KEYS};
@@ -30,7 +30,14 @@ use crate::{Error, Result};
 /// The largest scene file read (16 MiB): hand-written scenes are a few KiB.
 pub const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
 
-const TOP_KEYS: &[&str] = &["camera", "object", "light", "environment", "output"];
+const TOP_KEYS: &[&str] = &[
+    "camera",
+    "object",
+    "light",
+    "environment",
+    "render",
+    "output",
+];
 const CAMERA_KEYS: &[&str] = &["eye", "target", "up", "fov_deg", "orbit_deg"];
 const OBJECT_KEYS: &[&str] = &[
     "mesh",
@@ -42,6 +49,7 @@ const OBJECT_KEYS: &[&str] = &[
 ];
 pub(super) const LIGHT_KEYS: &[&str] = &["kind", "to_light", "irradiance", "position", "intensity"];
 pub(super) const ENVIRONMENT_KEYS: &[&str] = &["source", "intensity", "rotation_deg"];
+pub(super) const RENDER_KEYS: &[&str] = &["environment_model"];
 pub(super) const OUTPUT_KEYS: &[&str] = &[
     "size",
     "width",
@@ -259,6 +267,10 @@ pub fn scene_from_document(root: &Node) -> Result<Scene> {
         None => EnvironmentSpec::named(BUILTIN_STUDIO),
         Some(node) => environment(node)?,
     };
+    let render = match get("render") {
+        None => RenderSpec::default(),
+        Some(node) => render(node)?,
+    };
     let output = match get("output") {
         None => OutputSpec::default(),
         Some(node) => output(node)?,
@@ -268,6 +280,7 @@ pub fn scene_from_document(root: &Node) -> Result<Scene> {
         objects,
         lights,
         environment,
+        render,
         output,
     })
 }

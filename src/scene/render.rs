@@ -167,6 +167,7 @@ impl SceneRenderer {
                 camera: &scene.camera,
                 lights: &scene.lights,
                 environment,
+                environment_model: scene.render.environment_model,
                 background: scene.output.background,
             },
             &gpu_meshes,

@@ -1,4 +1,4 @@
-//! The scene sections that hold no meshes or materials: `[[light]]`, `[environment]` and
+//! The scene sections that hold no meshes or materials: `[[light]]`, `[environment]`, `[render]` and
 //! `[output]` (docs/scene.md). Split from [`super::parse`], whose helpers and rules they share.
 
 use glam::DVec3;
@@ -6,10 +6,11 @@ use glam::DVec3;
 use super::doc::{self, Node, Value};
 use super::parse::{
     format_of, located, number, show, string, table, vec3, whole, ENVIRONMENT_KEYS, LIGHT_KEYS,
-    OUTPUT_KEYS,
+    OUTPUT_KEYS, RENDER_KEYS,
 };
-use super::{EnvironmentLight, EnvironmentSource, EnvironmentSpec, OutputSpec};
+use super::{EnvironmentLight, EnvironmentSource, EnvironmentSpec, OutputSpec, RenderSpec};
 use crate::environment::load::BUILTIN_STUDIO;
+use crate::environment::EnvironmentModel;
 use crate::output::ToneCurve;
 use crate::raster::draw::{Background, SUPPORTED_SAMPLES};
 use crate::raster::lights::Light;
@@ -126,6 +127,22 @@ fn size_text(node: &Node, s: &str) -> Result<(u32, u32)> {
             "`size` must be \"WxH\" with whole numbers in 1..=16384, e.g. \"1024x768\"; found {s:?}"
         ))
     })
+}
+
+/// `[render]`: how light is computed.
+pub(super) fn render(node: &Node) -> Result<RenderSpec> {
+    let mut spec = RenderSpec::default();
+    for e in table(node, "[render]", RENDER_KEYS)? {
+        // RENDER_KEYS has one key so far: `environment_model`.
+        let text = string(&e.node, "environment_model")?;
+        spec.environment_model = EnvironmentModel::from_name(text).ok_or_else(|| {
+            e.node.at.error(format!(
+                "`environment_model` must be {}, found {text:?}",
+                EnvironmentModel::choices()
+            ))
+        })?;
+    }
+    Ok(spec)
 }
 
 /// `[output]`.

@@ -92,6 +92,8 @@ fn quick_bench_reports_every_stage_as_json() {
         "render.trivial_gpu",
         "render.lacquer_wall",
         "prefilter.gpu_wall",
+        "render.models.paper_gpu",
+        "render.models.brdf_gpu",
         "prefilter.gpu_passes",
         "prefilter.cpu_oracle",
         "batch.run_wall",
@@ -110,7 +112,11 @@ fn quick_bench_reports_every_stage_as_json() {
         "the render benchmark draws the ~100k-triangle bowl"
     );
     let targets = field(&report, "targets").as_array().unwrap();
-    assert_eq!(targets.len(), 6, "one verdict per target of issue 7");
+    assert_eq!(
+        targets.len(),
+        7,
+        "one verdict per target of issue 7, and issue 16's brdf/paper ratio"
+    );
     for target in targets {
         for key in ["description", "value", "limit", "met"] {
             assert!(

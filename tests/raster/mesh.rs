@@ -401,6 +401,7 @@ fn bowl_renders_validated_with_the_expected_coverage() {
                 camera: &camera,
                 lights: &lights,
                 environment: None,
+                environment_model: Default::default(),
                 background: Background::Transparent,
             },
             &RenderSettings {

@@ -1,6 +1,7 @@
 mod batch;
 mod cli;
 mod corpus;
+mod environment_model;
 mod errors;
 mod examples;
 mod properties;

@@ -43,11 +43,7 @@ impl GpuEnvironment {
             copy_to_image(rec, &irradiance_buffer.1, &irradiance);
             Ok(())
         })?;
-        Ok(GpuEnvironment {
-            betas: env.betas.clone(),
-            layers,
-            irradiance,
-        })
+        Ok(GpuEnvironment::new(env.betas.clone(), layers, irradiance))
     }
 }
 

@@ -17,6 +17,9 @@ shader_interface! {
         MAX_LIGHTS: usize = 16;
         /// The most environment layers K a prefilter makes and a draw samples.
         MAX_ENV_LAYERS: usize = 16;
+        /// Knots of the specular directional albedo A(nv) the `brdf` model normalises by, at
+        /// nv = (k/(ALBEDO_KNOTS − 1))² (environment/brdf_quadrature.rs `albedo_knots`).
+        ALBEDO_KNOTS: usize = 65;
         /// The most MSAA samples per pixel the shading pass reads from the G-buffer.
         MAX_SAMPLES: u32 = 4;
 
@@ -40,6 +43,10 @@ shader_interface! {
         /// The G-buffer as the shading pass samples it: position + object, normal.
         GBUFFER_POSITION_BINDING: u32 = 5;
         GBUFFER_NORMAL_BINDING: u32 = 6;
+        /// Every environment layer's cube texels, concatenated (layer k from
+        /// `Frame::layer_first_texel[k]`), RGBA32F: what the `brdf` model's lobe samples read
+        /// (brdf_environment.glsl).
+        ENV_LAYER_TEXELS_BINDING: u32 = 7;
 
         /// A prefilter step's set 0: the cube (or, for step 1, the equirect) it reads as a texel
         /// buffer, the cube it writes, and step 1's near-edge list (`NearHeader`, then texels).
@@ -51,6 +58,11 @@ shader_interface! {
         BRDF_EVAL_PARAMS_BINDING: u32 = 0;
         BRDF_EVAL_DIRECTIONS_BINDING: u32 = 2;
         BRDF_EVAL_VALUES_BINDING: u32 = 3;
+        /// brdf_environment_eval.comp's set 0, beside the draw's frame (`FRAME_BINDING`), Fresnel
+        /// knots (`FRESNEL_KNOTS_BINDING`) and layer texels (`ENV_LAYER_TEXELS_BINDING`).
+        ENV_EVAL_PARAMS_BINDING: u32 = 8;
+        ENV_EVAL_DIRECTIONS_BINDING: u32 = 9;
+        ENV_EVAL_VALUES_BINDING: u32 = 10;
 
         /// mesh.vert's vertex attributes (`GpuMesh`'s interleaved vertex buffer).
         VERTEX_POSITION_LOCATION: u32 = 0;
@@ -60,6 +72,10 @@ shader_interface! {
         /// covers show.
         BACKGROUND_COLOR: u32 = 0;
         BACKGROUND_ENVIRONMENT: u32 = 1;
+
+        /// The values of the `env_model` specialization constant: SPEC §4's environment models.
+        ENV_MODEL_PAPER: u32 = 0;
+        ENV_MODEL_BRDF: u32 = 1;
     }
 
     specialization_constants {
@@ -75,6 +91,10 @@ shader_interface! {
             /// Every Fresnel table of the draw has its knots on a power-of-two grid
             /// (`FRESNEL_POW2_GRID`, a VkBool32).
             fresnel_pow2_grid,
+            /// `ENV_MODEL_PAPER` or `ENV_MODEL_BRDF` (`ENV_MODEL`).
+            env_model,
+            /// The `brdf` model's lobe samples per shaded point (`ENV_SAMPLES`).
+            env_samples,
         }
     }
 
@@ -100,7 +120,9 @@ shader_interface! {
             /// Index of the table's first knot among the draw's concatenated knots (exact as a
             /// float below 2^24, which the renderer checks).
             fresnel_first: float,
-            pad0: float,
+            /// Index of the first of the object's `ALBEDO_KNOTS` directional-albedo knots
+            /// (nv, A_r, A_g, A_b) among the draw's knots (the `brdf` model; 0 in `paper`).
+            albedo_first: float,
             /// SPEC §4's β(nv) = β_grazing + (β_normal − β_grazing)·nv^p.
             beta_normal: float,
             beta_grazing: float,
@@ -132,6 +154,10 @@ shader_interface! {
             layer_beta: [vec4; MAX_ENV_LAYERS / 4],
             /// ln β_k for k ≥ 1 (0 where β_k ≤ 0): the shader interpolates layers linearly in ln β.
             layer_log_beta: [vec4; MAX_ENV_LAYERS / 4],
+            /// Face size of layer k, and the index of its first texel at `ENV_LAYER_TEXELS_BINDING`
+            /// (the `brdf` model's lookups), four per ivec4.
+            layer_face_size: [ivec4; MAX_ENV_LAYERS / 4],
+            layer_first_texel: [ivec4; MAX_ENV_LAYERS / 4],
             /// The camera basis (world), for the background's primary rays; `camera_back` is the
             /// negated view direction.
             camera_right: vec4,

@@ -9,7 +9,7 @@
 
 use super::gpu_mesh::upload;
 use super::types::{DrawScene, RenderSettings};
-use crate::environment::gpu::GpuEnvironment;
+use crate::environment::gpu::{layer_texel_offsets, GpuEnvironment};
 use crate::environment::params::ViewBlur;
 use crate::gpu::shaders::interface::{Frame, ObjectMaterial, MAX_ENV_LAYERS, MAX_LIGHTS};
 use crate::gpu::{Buffer, BufferUsage, GpuContext};
@@ -63,12 +63,13 @@ impl ObjectMaterial {
     pub(crate) fn of_object(
         brdf: &BrdfParams,
         fresnel: &FresnelTable,
-        first_knot: usize,
+        (first_knot, albedo_first): (usize, usize),
         view_blur: &ViewBlur,
     ) -> Self {
         ObjectMaterial {
             // Exact as f32: the renderer limits the knots of one draw to MAX_DRAW_KNOTS = 2^24.
             fresnel_first: first_knot as f32,
+            albedo_first: albedo_first as f32,
             beta_normal: view_blur.beta_normal as f32,
             beta_grazing: view_blur.beta_grazing as f32,
             beta_power: view_blur.beta_power as f32,
@@ -82,6 +83,8 @@ impl ObjectMaterial {
 pub(crate) struct EnvironmentUniforms {
     pub enabled: bool,
     pub layer_betas: Vec<f64>,
+    /// Each layer's face size (the `brdf` model's texel lookups).
+    pub layer_faces: Vec<u32>,
 }
 
 fn vec4(v: glam::DVec3, w: f32) -> [f32; 4] {
@@ -89,6 +92,23 @@ fn vec4(v: glam::DVec3, w: f32) -> [f32; 4] {
 }
 
 impl Frame {
+    /// Packs the environment layers' β, ln β, face sizes and first texels (the `brdf` model's
+    /// lookups); also used by the compute evaluator of the `brdf` model.
+    pub(crate) fn set_environment_layers(&mut self, betas: &[f64], faces: &[u32]) {
+        for (k, &beta) in betas.iter().take(MAX_ENV_LAYERS).enumerate() {
+            self.layer_beta[k / 4][k % 4] = beta as f32;
+            // Of the f32 β the shader compares against, so both describe the same layer.
+            let beta = f64::from(beta as f32);
+            self.layer_log_beta[k / 4][k % 4] = if beta > 0.0 { beta.ln() as f32 } else { 0.0 };
+        }
+        let (firsts, _) = layer_texel_offsets(faces.iter().copied());
+        for (k, (&face, first)) in faces.iter().zip(firsts).enumerate().take(MAX_ENV_LAYERS) {
+            self.layer_face_size[k / 4][k % 4] = face as i32;
+            // GpuEnvironment::layer_texels refuses more texels than an i32 indexes.
+            self.layer_first_texel[k / 4][k % 4] = first as i32;
+        }
+    }
+
     /// Packs one draw's camera, lights and environment. `lights.len()` must be ≤ MAX_LIGHTS
     /// (checked by the renderer before this is called; extra lights are ignored here).
     pub(crate) fn new(
@@ -123,17 +143,7 @@ impl Frame {
             ],
             ..Frame::zeroed()
         };
-        for (k, &beta) in environment
-            .layer_betas
-            .iter()
-            .take(MAX_ENV_LAYERS)
-            .enumerate()
-        {
-            frame.layer_beta[k / 4][k % 4] = beta as f32;
-            // Of the f32 β the shader compares against, so both describe the same layer.
-            let beta = f64::from(beta as f32);
-            frame.layer_log_beta[k / 4][k % 4] = if beta > 0.0 { beta.ln() as f32 } else { 0.0 };
-        }
+        frame.set_environment_layers(&environment.layer_betas, &environment.layer_faces);
         for (i, light) in lights.iter().take(MAX_LIGHTS).enumerate() {
             let (vector, color) = match *light {
                 Light::Directional {
@@ -154,6 +164,9 @@ impl Frame {
         frame
     }
 }
+
+/// One object's knots (Fresnel table or directional albedo), RGBA32F texels.
+pub(super) type Knots = Vec<[f32; 4]>;
 
 /// Fresnel knots the knot buffer holds before it must grow (the built-in tables have 91 each).
 const INITIAL_KNOTS: usize = 512;
@@ -208,7 +221,7 @@ impl DrawBuffers {
         scene: &DrawScene<'_>,
         settings: &RenderSettings,
         environment: &GpuEnvironment,
-        (object_knots, scene_radius): (&[Vec<[f32; 4]>], f64),
+        (object_knots, object_albedo, scene_radius): (&[Knots], &[Knots], f64),
     ) -> Result<Frame> {
         let mut frame = Frame::new(
             scene.camera,
@@ -219,6 +232,7 @@ impl DrawBuffers {
             &EnvironmentUniforms {
                 enabled: scene.environment.is_some(),
                 layer_betas: environment.betas.clone(),
+                layer_faces: environment.layer_faces(),
             },
         );
         let mut knots: Vec<[f32; 4]> = Vec::new();
@@ -226,10 +240,14 @@ impl DrawBuffers {
         for (i, (object, object_knots)) in scene.objects.iter().zip(object_knots).enumerate() {
             let first_knot = knots.len();
             knots.extend_from_slice(object_knots);
+            let albedo_first = knots.len();
+            if let Some(albedo) = object_albedo.get(i) {
+                knots.extend_from_slice(albedo);
+            }
             materials.push(ObjectMaterial::of_object(
                 object.brdf,
                 object.fresnel,
-                first_knot,
+                (first_knot, albedo_first),
                 &object.view_blur,
             ));
             frame.draw_info = [i as i32 + 1, 0, 0, 0];

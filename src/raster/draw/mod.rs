@@ -42,8 +42,9 @@ pub use types::{
     MAX_DRAW_KNOTS, SUPPORTED_SAMPLES,
 };
 
+use crate::environment::brdf_quadrature::AlbedoCache;
 use crate::environment::gpu::GpuEnvironment;
-use crate::environment::{CubeImage, PrefilteredEnvironment};
+use crate::environment::{CubeImage, EnvironmentModel, PrefilteredEnvironment};
 use crate::gpu::shaders::interface::Frame;
 use crate::gpu::{Buffer, DescriptorSet, GpuContext, GraphicsPipeline, Sampler, TimestampPool};
 use crate::output::HdrImage;
@@ -79,6 +80,8 @@ struct Resources {
     black_environment: Option<GpuEnvironment>,
     /// Made by the first timed draw.
     timestamps: Option<TimestampPool>,
+    /// Each material's directional-albedo knots (the `brdf` model), computed once.
+    albedo_cache: AlbedoCache,
 }
 
 impl Resources {
@@ -88,6 +91,7 @@ impl Resources {
             buffers: DrawBuffers::new(gpu)?,
             black_environment: None,
             timestamps: None,
+            albedo_cache: AlbedoCache::default(),
         })
     }
 }
@@ -168,6 +172,7 @@ impl LacquerRenderer {
             buffers,
             black_environment,
             timestamps,
+            albedo_cache,
         } = get_or_try_insert(&mut self.resources, || Resources::new(gpu))?;
         let environment = match scene.environment {
             Some(environment) => environment,
@@ -190,7 +195,22 @@ impl LacquerRenderer {
             .iter()
             .map(|o| o.mesh.bounding_radius())
             .fold(0.0, f64::max);
-        let frame = buffers.write(gpu, scene, settings, environment, (&knots, scene_radius))?;
+        // The `brdf` model normalises by each object's directional albedo A(nv).
+        let albedo: Vec<Vec<[f32; 4]>> = match scene.environment_model {
+            EnvironmentModel::Brdf => scene
+                .objects
+                .iter()
+                .map(|o| albedo_cache.knots(o.brdf, o.fresnel))
+                .collect(),
+            EnvironmentModel::Paper => Vec::new(),
+        };
+        let frame = buffers.write(
+            gpu,
+            scene,
+            settings,
+            environment,
+            (&knots, &albedo, scene_radius),
+        )?;
         let inputs = DrawInputs {
             gpu,
             scene,
@@ -281,8 +301,14 @@ fn draw_deferred(
         inputs.key(PipelineKind::Shade(ShadeVariant {
             environment_background,
             fresnel_pow2_grid,
+            environment_model: scene.environment_model,
         })),
     )?;
+    // The `paper` model never reads the layer texels: any texel buffer fills the binding.
+    let layer_texels = match scene.environment_model {
+        EnvironmentModel::Brdf => inputs.environment.layer_texels(gpu)?,
+        EnvironmentModel::Paper => &buffers.knots,
+    };
     let object_sets = inputs.object_sets(&gbuffer, buffers)?;
     let objects: Vec<DrawnMesh<'_>> = inputs.meshes.iter().copied().zip(&object_sets).collect();
     let targets = targets.deferred(gpu, inputs.target_size())?;
@@ -291,7 +317,7 @@ fn draw_deferred(
         gpu,
         &shade,
         buffers,
-        inputs.environment,
+        (inputs.environment, layer_texels),
         inputs.sampler,
         gbuffer_images,
     )?;

@@ -4,11 +4,14 @@
 
 use super::frame::DrawBuffers;
 use super::gpu_mesh::{VERTEX_ATTRIBUTES, VERTEX_STRIDE};
+use crate::environment::brdf_quadrature::BRDF_SAMPLES;
 use crate::environment::gpu::GpuEnvironment;
+use crate::environment::EnvironmentModel;
 use crate::gpu::shaders::interface::{
     DrawConstants, BACKGROUND_COLOR, BACKGROUND_ENVIRONMENT, ENV_IRRADIANCE_BINDING,
-    ENV_LAYERS_BINDING, FRAME_BINDING, FRESNEL_KNOTS_BINDING, GBUFFER_NORMAL_BINDING,
-    GBUFFER_POSITION_BINDING, MAX_ENV_LAYERS, OBJECT_MATERIAL_BINDING,
+    ENV_LAYERS_BINDING, ENV_LAYER_TEXELS_BINDING, ENV_MODEL_BRDF, ENV_MODEL_PAPER, FRAME_BINDING,
+    FRESNEL_KNOTS_BINDING, GBUFFER_NORMAL_BINDING, GBUFFER_POSITION_BINDING, MAX_ENV_LAYERS,
+    OBJECT_MATERIAL_BINDING,
 };
 use crate::gpu::{
     Binding, BindingKind, Buffer, DepthCompare, DepthTest, DescriptorSet, Format, GpuContext,
@@ -32,8 +35,9 @@ const GRAPHICS_BINDINGS: [Binding; 3] = [
 ];
 
 /// The shading pass's set (coverage_body.glsl, shade_body.glsl): the frame, the Fresnel knots,
-/// the environment, the materials and the G-buffer.
-const SHADE_BINDINGS: [Binding; 7] = [
+/// the environment (its layers also as texels, for the `brdf` model), the materials and the
+/// G-buffer.
+const SHADE_BINDINGS: [Binding; 8] = [
     Binding::new(FRAME_BINDING, BindingKind::UniformBuffer),
     Binding::new(FRESNEL_KNOTS_BINDING, BindingKind::UniformTexelBuffer),
     Binding::array(
@@ -45,6 +49,7 @@ const SHADE_BINDINGS: [Binding; 7] = [
     Binding::new(OBJECT_MATERIAL_BINDING, BindingKind::UniformTexelBuffer),
     Binding::new(GBUFFER_POSITION_BINDING, BindingKind::SampledImage),
     Binding::new(GBUFFER_NORMAL_BINDING, BindingKind::SampledImage),
+    Binding::new(ENV_LAYER_TEXELS_BINDING, BindingKind::UniformTexelBuffer),
 ];
 
 /// The specialization constants of a shading pipeline that depend on the draw.
@@ -54,6 +59,8 @@ pub(super) struct ShadeVariant {
     pub environment_background: bool,
     /// See [`fresnel_on_pow2_grid`].
     pub fresnel_pow2_grid: bool,
+    /// SPEC §4's environment model.
+    pub environment_model: EnvironmentModel,
 }
 
 /// Whether a table's knots (as the shader reads them, f32) lie at exactly i·step degrees from 0
@@ -104,7 +111,7 @@ impl PipelineKey {
             PipelineKind::Shade(variant) => variant,
             PipelineKind::Coverage(environment_background) => ShadeVariant {
                 environment_background,
-                fresnel_pow2_grid: false,
+                ..ShadeVariant::default()
             },
             _ => ShadeVariant::default(),
         };
@@ -116,6 +123,11 @@ impl PipelineKey {
                 false => BACKGROUND_COLOR,
             },
             fresnel_pow2_grid: u32::from(variant.fresnel_pow2_grid),
+            env_model: match variant.environment_model {
+                EnvironmentModel::Paper => ENV_MODEL_PAPER,
+                EnvironmentModel::Brdf => ENV_MODEL_BRDF,
+            },
+            env_samples: BRDF_SAMPLES,
         }
     }
 
@@ -285,12 +297,14 @@ pub(super) fn graphics_set(
     )?)
 }
 
-/// A set of [`SHADE_BINDINGS`]: the draw's buffers, the environment and the G-buffer.
+/// A set of [`SHADE_BINDINGS`]: the draw's buffers, the environment (`layer_texels`: its
+/// [`GpuEnvironment::layer_texels`] in the `brdf` model, any texel buffer in the `paper` model,
+/// which never reads it) and the G-buffer.
 pub(super) fn shade_set(
     gpu: &GpuContext,
     pipeline: &GraphicsPipeline,
     buffers: &DrawBuffers,
-    environment: &GpuEnvironment,
+    (environment, layer_texels): (&GpuEnvironment, &Buffer),
     sampler: &Sampler,
     (position, normal): (&Image, &Image),
 ) -> Result<DescriptorSet> {
@@ -318,6 +332,10 @@ pub(super) fn shade_set(
             (
                 GBUFFER_NORMAL_BINDING,
                 Resource::SampledImage(normal, sampler),
+            ),
+            (
+                ENV_LAYER_TEXELS_BINDING,
+                Resource::TexelBuffer(layer_texels),
             ),
         ],
     )?)

@@ -211,6 +211,7 @@ mod tests {
             camera: &camera,
             lights: &lights,
             environment: None,
+            environment_model: Default::default(),
             background: Background::Color([0.1, 0.2, 0.3]),
         };
         let settings = RenderSettings {

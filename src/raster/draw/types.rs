@@ -2,7 +2,7 @@
 //! and the checks a draw makes of them before touching the device.
 
 use crate::environment::gpu::GpuEnvironment;
-use crate::environment::params::ViewBlur;
+use crate::environment::params::{EnvironmentModel, ViewBlur};
 use crate::gpu::shaders::interface::{MAX_ENV_LAYERS, MAX_LIGHTS, MAX_SAMPLES};
 use crate::gpu::GpuContext;
 use crate::model::{BrdfParams, FresnelTable};
@@ -75,6 +75,8 @@ pub struct DrawScene<'a> {
     pub lights: &'a [Light],
     /// The prefiltered environment lighting the objects, if any.
     pub environment: Option<&'a GpuEnvironment>,
+    /// How the environment lights them (SPEC §4).
+    pub environment_model: EnvironmentModel,
     pub background: Background,
 }
 

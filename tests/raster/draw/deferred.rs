@@ -99,6 +99,7 @@ fn render_both(
         camera: &camera,
         lights: &lights,
         environment,
+        environment_model: Default::default(),
         background,
     };
     let mut renderer = LacquerRenderer::new();
@@ -261,6 +262,7 @@ fn fresnel_lookup_without_search_matches_the_general_one() {
             camera: &camera,
             lights: &lights,
             environment: Some(&env),
+            environment_model: Default::default(),
             background: Background::Transparent,
         };
         renderer.render(&gpu, &scene, &settings).unwrap()

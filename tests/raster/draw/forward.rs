@@ -123,6 +123,7 @@ fn render_both(
                 camera,
                 lights: &lights,
                 environment: None,
+                environment_model: Default::default(),
                 background: Background::Transparent,
             },
             &RenderSettings {

@@ -1,0 +1,158 @@
+// SPEC §4's `brdf` environment model, specular half: ∫ f_spec(N, V, s)·L(s)·(N·s) dω_s by a fixed
+// quadrature. The CPU twin is src/environment/brdf_quadrature.rs: change both together, formula by
+// formula.
+//
+// ENV_SAMPLES half vectors from a Hammersley set in the Beckmann lobe, in a frame whose first axis
+// lies in the plane of incidence; each reflected direction s weighs F(acos V·H)·G·(V·H)/(nv·nh)
+// and reads the layers at the β whose lobe covers its share 1/(ENV_SAMPLES·pdf(s)) of the sphere
+// (filtered importance sampling). The lookups are bilinear by hand from the layers' texels
+// (`env_layer_texels`), with one seam rule written out here and in the twin: a tap beyond its face
+// reads the texel holding the tap's direction on the face that direction selects. The sampler's
+// own cube filtering leaves the edges and corners to the implementation.
+//
+// The includer includes frame.glsl and lacquer_brdf.glsl first and binds ENV_LAYER_TEXELS_BINDING.
+
+#ifndef BRDF_ENVIRONMENT_GLSL
+#define BRDF_ENVIRONMENT_GLSL
+
+#include "texel_buffer.glsl"
+layout(set = 0, binding = ENV_LAYER_TEXELS_BINDING) uniform textureBuffer env_layer_texels;
+
+layout(constant_id = ENV_SAMPLES_ID) const int ENV_SAMPLES = 32;
+
+// (face, sc, tc) of a direction by the Vulkan face-selection table (src/environment/cube.rs
+// `direction_to_face`; ties go to X, then Y, then Z), and the face's frame: its direction at
+// (sc, tc) is axis + s_dir·sc + t_dir·tc (cubemap.glsl's `face_direction`, without a switch).
+void select_face(vec3 d, out int face, out vec2 st, out vec3 axis, out vec3 s_dir, out vec3 t_dir) {
+    vec3 a = abs(d);
+    float major;
+    if (a.x >= a.y && a.x >= a.z) {
+        bool pos = d.x >= 0.0;
+        face = pos ? 0 : 1;
+        major = a.x;
+        axis = vec3(pos ? 1.0 : -1.0, 0.0, 0.0);
+        s_dir = vec3(0.0, 0.0, pos ? -1.0 : 1.0);
+        t_dir = vec3(0.0, -1.0, 0.0);
+    } else if (a.y >= a.z) {
+        bool pos = d.y >= 0.0;
+        face = pos ? 2 : 3;
+        major = a.y;
+        axis = vec3(0.0, pos ? 1.0 : -1.0, 0.0);
+        s_dir = vec3(1.0, 0.0, 0.0);
+        t_dir = vec3(0.0, 0.0, pos ? 1.0 : -1.0);
+    } else {
+        bool pos = d.z >= 0.0;
+        face = pos ? 4 : 5;
+        major = a.z;
+        axis = vec3(0.0, 0.0, pos ? 1.0 : -1.0);
+        s_dir = vec3(pos ? 1.0 : -1.0, 0.0, 0.0);
+        t_dir = vec3(0.0, -1.0, 0.0);
+    }
+    st = vec2(dot(d, s_dir), dot(d, t_dir)) / major;
+}
+
+// The texel of layer k holding direction d.
+vec3 layer_texel(int k, vec3 d) {
+    int face;
+    vec2 st;
+    vec3 axis, s_dir, t_dir;
+    select_face(d, face, st, axis, s_dir, t_dir);
+    int size = frame.layer_face_size[k / 4][k % 4];
+    ivec2 ij = clamp(ivec2(floor((st + 1.0) * 0.5 * float(size))), ivec2(0), ivec2(size - 1));
+    int first = frame.layer_first_texel[k / 4][k % 4];
+    return texelFetch(env_layer_texels, first + (face * size + ij.y) * size + ij.x).rgb;
+}
+
+// Layer k at d, bilinear over the four texel centres around d; each tap is looked up by its
+// direction (for a tap inside the face that is the texel itself).
+vec3 layer_bilinear(int k, vec3 d) {
+    int face;
+    vec2 st;
+    vec3 axis, s_dir, t_dir;
+    select_face(d, face, st, axis, s_dir, t_dir);
+    float size = float(frame.layer_face_size[k / 4][k % 4]);
+    vec2 xy = (st + 1.0) * 0.5 * size - 0.5;
+    vec2 xy0 = floor(xy);
+    vec2 f = xy - xy0;
+    // Face coordinates of the tap centres x0, x0 + 1 (and y0, y0 + 1).
+    vec2 c0 = 2.0 * (xy0 + 0.5) / size - 1.0;
+    vec2 c1 = 2.0 * (xy0 + 1.5) / size - 1.0;
+    vec3 a = layer_texel(k, axis + s_dir * c0.x + t_dir * c0.y);
+    vec3 b = layer_texel(k, axis + s_dir * c1.x + t_dir * c0.y);
+    vec3 c = layer_texel(k, axis + s_dir * c0.x + t_dir * c1.y);
+    vec3 e = layer_texel(k, axis + s_dir * c1.x + t_dir * c1.y);
+    vec3 top = a + (b - a) * f.x;
+    vec3 bottom = c + (e - c) * f.x;
+    return top + (bottom - top) * f.y;
+}
+
+// Lpre(d, β) from the texels: the same layers and blend as `prefiltered_radiance`, read by hand.
+vec3 layered_radiance(vec3 d, float beta) {
+    int k0;
+    float t;
+    layer_pair(beta, k0, t);
+    vec3 lo = layer_bilinear(k0, d);
+    if (t == 0.0) {
+        return lo;
+    }
+    vec3 hi = layer_bilinear(min(k0 + 1, ENV_LAYER_COUNT - 1), d);
+    return lo + (hi - lo) * t;
+}
+
+// A(nv) from the object's ALBEDO_KNOTS knots (nv, A_r, A_g, A_b) at nv = (k/(ALBEDO_KNOTS − 1))²
+// among the Fresnel knots, linear in √nv between knots (twin of brdf_quadrature.rs `albedo_at`).
+vec3 albedo_at(int first, float nv) {
+    int last = ALBEDO_KNOTS - 1;
+    float x = sqrt(clamp(nv, 0.0, 1.0)) * float(last);
+    int k = min(int(floor(x)), last - 1);
+    float t = x - float(k);
+    vec3 a = texelFetch(fresnel_knots, first + k).yzw;
+    vec3 b = texelFetch(fresnel_knots, first + k + 1).yzw;
+    return a + (b - a) * t;
+}
+
+// ∫ f_spec(N, V, s)·L(s)·(N·s) dω_s at a surface point (unit n, v; nv = N·V > 0): the weighted
+// mean of the lookups times the directional albedo A(nv), Σ w·L / Σ w · A(nv), exact in a white
+// furnace at every nv.
+vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
+    vec3 along = v - nv * n;
+    float along2 = dot(along, along);
+    // Any axis at normal incidence: there the pattern's orientation does not matter.
+    vec3 other = abs(n.x) < 0.5 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
+    vec3 tangent = along2 > 1e-12 ? along * inversesqrt(along2) : normalize(cross(n, other));
+    vec3 bitangent = cross(n, tangent);
+    float m2 = p.beckmann_m * p.beckmann_m;
+    vec3 sum = vec3(0.0);
+    vec3 weights = vec3(0.0);
+    for (int i = 0; i < ENV_SAMPLES; ++i) {
+        float u = (float(i) + 0.5) / float(ENV_SAMPLES);
+        float w = float(bitfieldReverse(uint(i))) * (1.0 / 4294967296.0);
+        // u = 1 − exp(−tan²θ_H/m²): the Beckmann lobe's distribution of D·cos θ_H.
+        float rest = 1.0 - u;
+        float tan2 = -m2 * log(rest);
+        float cos_h = inversesqrt(1.0 + tan2);
+        float sin_h = sqrt(tan2) * cos_h;
+        float phi = 2.0 * PI * w;
+        vec3 h = tangent * (sin_h * cos(phi)) + bitangent * (sin_h * sin(phi)) + n * cos_h;
+        float vh = dot(v, h);
+        vec3 s = 2.0 * vh * h - v;
+        float nl = dot(n, s);
+        if (vh > 0.0 && nl > 0.0) {
+            float g = cook_torrance_g(cos_h, nv, nl, vh);
+            vec3 f = fresnel_table(angle_deg_of_cos(min(vh, 1.0)), p.fresnel_first, p.fresnel_count);
+            // pdf(s) = D·cos θ_H/(4·V·H) with D = (1 − u)/(π m² cos⁴θ_H); the lookup's lobe
+            // 2πβ² covers 1/(ENV_SAMPLES·pdf).
+            float pdf = rest / (4.0 * PI * m2 * cos_h * cos_h * cos_h * vh);
+            float beta = sqrt(1.0 / (2.0 * PI * float(ENV_SAMPLES) * pdf));
+            vec3 weight = f * (g * vh / (nv * cos_h));
+            sum += weight * layered_radiance(s, beta);
+            weights += weight;
+        }
+    }
+    vec3 a = albedo_at(p.albedo_first, nv);
+    return vec3(weights.r > 0.0 ? sum.r / weights.r * a.r : 0.0,
+                weights.g > 0.0 ? sum.g / weights.g * a.g : 0.0,
+                weights.b > 0.0 ? sum.b / weights.b * a.b : 0.0);
+}
+
+#endif
