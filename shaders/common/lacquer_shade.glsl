@@ -1,5 +1,5 @@
 // Radiance leaving a lacquer surface point towards the camera: Σ over lights of f_r · E · (N·L)
-// (SPEC §2, §4) plus the environment term of the pipeline's model (ENV_MODEL, SPEC §4):
+// · vis (SPEC §2, §4, §6) plus the environment term of the pipeline's model (ENV_MODEL, SPEC §4):
 // `paper`: L_env = F(acos nv)·Lpre(R, β(nv)) + k_d·max(a + b·nv, 0)·g(r)·E_irr(N)/π;
 // `brdf`: the same diffuse half, and the specular integral of brdf_environment.glsl.
 //
@@ -9,6 +9,7 @@
 #define LACQUER_SHADE_GLSL
 
 #include "brdf_environment.glsl"
+#include "visibility.glsl"
 
 // A constant, so a pipeline compiles only its model's code.
 layout(constant_id = ENV_MODEL_ID) const int ENV_MODEL = ENV_MODEL_PAPER;
@@ -33,8 +34,10 @@ vec3 environment_light(LacquerParams p, vec3 view_blur, vec3 n, vec3 v, vec2 nv2
     return specular + f_diff * irradiance;
 }
 
-// `position` and `interpolated_normal` as the rasteriser interpolated them at a pixel centre.
-vec3 lacquer_radiance(LacquerParams p, vec3 view_blur, vec3 position, vec3 interpolated_normal) {
+// `position` and `interpolated_normal` as the rasteriser interpolated them at a pixel centre;
+// `surface`: where its shadow rays start (visibility.glsl; unused without RAY_TRACING).
+vec3 lacquer_radiance(LacquerParams p, vec3 view_blur, vec3 position, vec3 interpolated_normal,
+    RaySurface surface) {
     vec3 n = normalize(interpolated_normal);
     vec3 v = normalize(frame.eye.xyz - position);
     // Light-independent parts of f_r, once per point (see lacquer_brdf_view).
@@ -61,7 +64,9 @@ vec3 lacquer_radiance(LacquerParams p, vec3 view_blur, vec3 position, vec3 inter
         if (nl <= 0.0) {
             continue;
         }
-        radiance += lacquer_brdf_view(p, n, v, l, nv2, f_diff) * irradiance * nl;
+        // SPEC §6: lights with visibility (always 1 without ray tracing).
+        float visible = light_visibility(surface, lv);
+        radiance += lacquer_brdf_view(p, n, v, l, nv2, f_diff) * irradiance * (nl * visible);
     }
     if (frame.environment.x != 0) {
         radiance += environment_light(p, view_blur, n, v, nv2, f_diff);

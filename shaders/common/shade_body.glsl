@@ -25,10 +25,16 @@ layout(set = 0, binding = OBJECT_MATERIAL_BINDING) uniform textureBuffer object_
 
 layout(location = 0) out vec4 out_radiance; // linear radiance, alpha = coverage
 
-vec3 shade_object(int object, vec3 position, vec3 interpolated_normal) {
+// `normal`: the G-buffer's (w: the triangle, with RAY_TRACING).
+vec3 shade_object(int object, vec3 position, vec4 normal) {
     ObjectMaterial m = FETCH_OBJECT_MATERIAL(object_material, object);
     vec3 view_blur = vec3(m.beta_normal, m.beta_grazing, m.beta_power);
-    return lacquer_radiance(lacquer_params(m), view_blur, position, interpolated_normal);
+#ifdef RAY_TRACING
+    RaySurface surface = ray_surface(object, int(normal.w), position, normalize(normal.xyz));
+#else
+    RaySurface surface = RaySurface(position, normal.xyz);
+#endif
+    return lacquer_radiance(lacquer_params(m), view_blur, position, normal.xyz, surface);
 }
 
 void main() {
@@ -75,7 +81,7 @@ void main() {
         }
         // `first` always: a NaN (never written by gbuffer.frag) must not stall the loop.
         same = (same & todo) | (todo != 0u ? 1u << first : 0u);
-        vec3 radiance = shade_object(max(int(p.w) - 1, 0), p.xyz, n.xyz);
+        vec3 radiance = shade_object(max(int(p.w) - 1, 0), p.xyz, n);
         sum += vec4(radiance, 1.0) * float(bitCount(same));
         todo &= ~same;
     } while (todo != 0u);

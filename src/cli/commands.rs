@@ -179,6 +179,7 @@ fn scene_from_flags(args: &RenderArgs) -> Result<Scene> {
         environment: environment_from_flags(&args.environment),
         render: RenderSpec {
             environment_model: args.env_model.unwrap_or_default(),
+            ..RenderSpec::default()
         },
         output: OutputSpec {
             width: args.size.0,

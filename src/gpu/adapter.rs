@@ -324,10 +324,13 @@ fn ray_query_lack(
         .push_next(&mut ray_query);
     // SAFETY: the chained structs live on this stack frame; their extensions are supported.
     unsafe { instance.get_physical_device_features2(device, &mut features) };
+    let geometry_shader = features.features.geometry_shader;
     let lacking: Vec<&str> = [
         (features12.buffer_device_address, "bufferDeviceAddress"),
         (acceleration.acceleration_structure, "accelerationStructure"),
         (ray_query.ray_query, "rayQuery"),
+        // The ray-traced G-buffer pass reads gl_PrimitiveID in its fragment shader.
+        (geometry_shader, "geometryShader"),
     ]
     .iter()
     .filter(|(value, _)| *value == vk::FALSE)

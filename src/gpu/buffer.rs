@@ -22,6 +22,21 @@ impl BufferUsage {
     pub const UNIFORM_TEXEL: Self = Self(vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER);
     /// Holds the arguments of an indirect dispatch (`Recorder::dispatch_indirect`).
     pub const INDIRECT: Self = Self(vk::BufferUsageFlags::INDIRECT_BUFFER);
+    /// Read by an acceleration-structure build (vertices, indices, instances), by address.
+    pub const ACCELERATION_INPUT: Self = Self(vk::BufferUsageFlags::from_raw(
+        vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR.as_raw()
+            | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS.as_raw(),
+    ));
+    /// Holds an acceleration structure.
+    pub(crate) const ACCELERATION_STORAGE: Self = Self(vk::BufferUsageFlags::from_raw(
+        vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR.as_raw()
+            | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS.as_raw(),
+    ));
+    /// An acceleration-structure build's scratch memory.
+    pub(crate) const ACCELERATION_SCRATCH: Self = Self(vk::BufferUsageFlags::from_raw(
+        vk::BufferUsageFlags::STORAGE_BUFFER.as_raw()
+            | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS.as_raw(),
+    ));
     pub const TRANSFER_SRC: Self = Self(vk::BufferUsageFlags::TRANSFER_SRC);
     pub const TRANSFER_DST: Self = Self(vk::BufferUsageFlags::TRANSFER_DST);
 }
@@ -140,6 +155,27 @@ impl Buffer {
 
     pub fn size(&self) -> u64 {
         self.desc.size
+    }
+
+    /// The buffer's device address (made with a `SHADER_DEVICE_ADDRESS` usage, on a device with
+    /// ray queries: the only one with `bufferDeviceAddress` enabled).
+    pub(crate) fn device_address(&self) -> Result<u64, GpuError> {
+        if !self.shared.info.ray_query.is_enabled()
+            || !self
+                .desc
+                .usage
+                .0
+                .contains(vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS)
+        {
+            return Err(GpuError::MissingFeature {
+                device: self.shared.info.name.clone(),
+                what: format!("the device address of buffer {:?}", self.desc.name),
+            });
+        }
+        let info = vk::BufferDeviceAddressInfo::default().buffer(self.raw);
+        // SAFETY: the buffer is live and was made with SHADER_DEVICE_ADDRESS on a device with
+        // bufferDeviceAddress enabled (checked above).
+        Ok(unsafe { self.shared.device.get_buffer_device_address(&info) })
     }
 
     /// Copies `data` to the start of a host-visible buffer.

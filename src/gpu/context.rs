@@ -108,7 +108,7 @@ struct Submission {
 /// The Vulkan device shikki renders with.
 pub struct GpuContext {
     submission: Mutex<Submission>,
-    shared: Arc<DeviceShared>,
+    pub(super) shared: Arc<DeviceShared>,
     pipeline_cache_path: Option<PathBuf>,
 }
 

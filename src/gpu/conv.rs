@@ -56,6 +56,12 @@ pub enum Access {
     GraphicsShaderRead,
     ColorAttachmentWrite,
     DepthAttachmentWrite,
+    /// An acceleration-structure build writing its structure.
+    AccelerationStructureBuild,
+    /// A top-level build reading the bottom-level structures.
+    AccelerationStructureBuildRead,
+    /// Ray queries in the fragment or compute stage.
+    RayQuery,
 }
 
 pub(crate) fn stage_access(access: Access) -> (vk::PipelineStageFlags2, vk::AccessFlags2) {
@@ -88,6 +94,18 @@ pub(crate) fn stage_access(access: Access) -> (vk::PipelineStageFlags2, vk::Acce
         Access::DepthAttachmentWrite => (
             S::EARLY_FRAGMENT_TESTS | S::LATE_FRAGMENT_TESTS,
             A::DEPTH_STENCIL_ATTACHMENT_WRITE | A::DEPTH_STENCIL_ATTACHMENT_READ,
+        ),
+        Access::AccelerationStructureBuild => (
+            S::ACCELERATION_STRUCTURE_BUILD_KHR,
+            A::ACCELERATION_STRUCTURE_WRITE_KHR,
+        ),
+        Access::AccelerationStructureBuildRead => (
+            S::ACCELERATION_STRUCTURE_BUILD_KHR,
+            A::ACCELERATION_STRUCTURE_READ_KHR,
+        ),
+        Access::RayQuery => (
+            S::FRAGMENT_SHADER | S::COMPUTE_SHADER,
+            A::ACCELERATION_STRUCTURE_READ_KHR,
         ),
     }
 }

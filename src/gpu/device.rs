@@ -19,6 +19,8 @@ pub(crate) struct DeviceShared {
     pub validation: bool,
     /// Handed to every pipeline creation; null when there is none.
     pub pipeline_cache: vk::PipelineCache,
+    /// The acceleration-structure functions, on a device with ray queries enabled.
+    pub acceleration: Option<ash::khr::acceleration_structure::Device>,
     allocator: ManuallyDrop<Mutex<Allocator>>,
     instance: InstanceParts,
 }
@@ -52,6 +54,9 @@ impl DeviceShared {
                         }
                     })
                     .unwrap_or(vk::PipelineCache::null());
+                let acceleration = adapter.info.ray_query.is_enabled().then(|| {
+                    ash::khr::acceleration_structure::Device::new(&instance.instance, &device)
+                });
                 Ok(DeviceShared {
                     device,
                     queue_family: adapter.queue_family,
@@ -59,6 +64,7 @@ impl DeviceShared {
                     log,
                     validation,
                     pipeline_cache,
+                    acceleration,
                     allocator: ManuallyDrop::new(Mutex::new(allocator)),
                     instance,
                 })
@@ -115,8 +121,11 @@ fn create_device(
     let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
         .dynamic_rendering(true)
         .synchronization2(true);
-    let features =
-        vk::PhysicalDeviceFeatures::default().shader_float64(adapter.info.shader_float64);
+    // geometryShader: the ray-traced G-buffer pass reads gl_PrimitiveID (checked with the
+    // ray-query features).
+    let features = vk::PhysicalDeviceFeatures::default()
+        .shader_float64(adapter.info.shader_float64)
+        .geometry_shader(ray_query);
     // Ray queries: the KHR extension structs, not Vulkan 1.4 core ones (the validation layer
     // 1.3.239 that Debian 12 ships rejects those).
     let mut features12 = vk::PhysicalDeviceVulkan12Features::default().buffer_device_address(true);

@@ -22,6 +22,7 @@
 //!   `loop_body_runs_when_no_lane_enters`, `late_timestamps_after_graphics`); `shikki info`
 //!   lists the active ones.
 
+mod accel;
 mod adapter;
 mod buffer;
 mod command;
@@ -36,6 +37,7 @@ mod pipeline;
 mod query;
 pub mod shaders;
 
+pub use accel::{AccelerationStructure, Instance, TriangleGeometry};
 pub use adapter::{AdapterInfo, Quirks, RayQuery};
 pub use buffer::{Buffer, BufferDesc, BufferUsage, MemoryUse};
 pub use command::{ImageUse, Recorder, RenderTargets};

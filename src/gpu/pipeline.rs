@@ -4,6 +4,7 @@
 //! constant block visible to all its stages. Descriptor sets are allocated from a small pool of
 //! their own, so a set and its pool live and die together.
 
+use super::accel::AccelerationStructure;
 use super::buffer::Buffer;
 use super::conv::{self, DepthTest, Format};
 use super::device::DeviceShared;
@@ -20,6 +21,8 @@ pub enum BindingKind {
     StorageImage,
     /// A `textureBuffer` of RGBA32F texels, for gathered reads (quirk `ssbo_gather_is_per_lane`).
     UniformTexelBuffer,
+    /// An `accelerationStructureEXT` for ray queries.
+    AccelerationStructure,
 }
 
 /// One binding of set 0 (an array of `count` descriptors when count > 1).
@@ -51,6 +54,7 @@ fn descriptor_type(kind: BindingKind) -> vk::DescriptorType {
         BindingKind::SampledImage => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
         BindingKind::StorageImage => vk::DescriptorType::STORAGE_IMAGE,
         BindingKind::UniformTexelBuffer => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+        BindingKind::AccelerationStructure => vk::DescriptorType::ACCELERATION_STRUCTURE_KHR,
     }
 }
 
@@ -429,6 +433,7 @@ pub enum Resource<'a> {
     StorageImage(&'a Image),
     /// The whole buffer as RGBA32F texels (created with `BufferUsage::UNIFORM_TEXEL`).
     TexelBuffer(&'a Buffer),
+    AccelerationStructure(&'a AccelerationStructure),
 }
 
 /// Set 0 of a pipeline, filled in once.
@@ -505,7 +510,35 @@ impl DescriptorSet {
         resources: &[(u32, Resource<'_>)],
     ) -> Result<(), GpuError> {
         let infos = self.infos(resources)?;
-        let writes = self.writes(layout, &infos)?;
+        let mut writes = self.writes(layout, &infos)?;
+        // An acceleration structure's descriptor is a chained struct, not a buffer or image info.
+        let mut structures: Vec<vk::WriteDescriptorSetAccelerationStructureKHR> = infos
+            .structures
+            .iter()
+            .map(|(_, raw)| {
+                vk::WriteDescriptorSetAccelerationStructureKHR::default()
+                    .acceleration_structures(raw)
+            })
+            .collect();
+        for ((index, _), chained) in infos.structures.iter().zip(&mut structures) {
+            let binding = layout
+                .bindings
+                .iter()
+                .find(|b| b.index == *index && b.kind == BindingKind::AccelerationStructure)
+                .ok_or(GpuError::Limit {
+                    what: "acceleration-structure binding index (not in the pipeline layout)",
+                    value: u64::from(*index),
+                    limit: layout.bindings.len() as u64,
+                })?;
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(self.raw)
+                    .dst_binding(binding.index)
+                    .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
+                    .descriptor_count(1)
+                    .push_next(chained),
+            );
+        }
         // SAFETY: the set is not in use by any pending command buffer; infos outlive the call.
         unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
         Ok(())
@@ -545,6 +578,7 @@ impl DescriptorSet {
                     }],
                 )),
                 Resource::TexelBuffer(b) => infos.texel_views.push((*index, self.texel_view(b)?)),
+                Resource::AccelerationStructure(a) => infos.structures.push((*index, [a.raw])),
             }
         }
         Ok(infos)
@@ -603,6 +637,7 @@ struct DescriptorInfos {
     buffers: Vec<(u32, vk::DescriptorBufferInfo)>,
     texel_views: Vec<(u32, vk::BufferView)>,
     images: Vec<(u32, Vec<vk::DescriptorImageInfo>)>,
+    structures: Vec<(u32, [vk::AccelerationStructureKHR; 1])>,
 }
 
 impl Drop for DescriptorSet {

@@ -3,6 +3,9 @@
 //! It ray-casts the exact analytic shapes with the lacquer model of `model/` and the camera and
 //! lights of `raster/`. It owns no model maths of its own and must never call the GPU.
 
+pub mod bvh;
 pub mod raycast;
+pub mod shadows;
 
+pub use bvh::{BvhHit, SceneBvh};
 pub use raycast::{intersect, render, shade, AnalyticShape, OracleScene, SurfaceHit};

@@ -112,10 +112,34 @@ impl Default for Scene {
     }
 }
 
-/// How light is computed (`[render]`): SPEC §4's environment model.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// How light is computed (`[render]`): SPEC §4's environment model and SPEC §6's light between
+/// objects.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSpec {
     pub environment_model: EnvironmentModel,
+    /// Lights with visibility (shadow rays), where ray tracing is on.
+    pub shadows: bool,
+    /// Ray queries for light between objects, where the device has them (`false`: every object
+    /// shaded as if alone, today's image on every device).
+    pub ray_tracing: bool,
+}
+
+impl Default for RenderSpec {
+    fn default() -> Self {
+        Self {
+            environment_model: EnvironmentModel::default(),
+            shadows: true,
+            ray_tracing: true,
+        }
+    }
+}
+
+impl RenderSpec {
+    /// Whether a draw on `gpu` traces shadow rays: asked for, and the device has ray queries
+    /// (without them the image is today's, and the CLI says so once).
+    pub fn traces_shadows(&self, gpu: &crate::gpu::GpuContext) -> bool {
+        self.shadows && self.ray_tracing && gpu.info().ray_query.is_enabled()
+    }
 }
 
 /// Image size, anti-aliasing and the PNG conversion (SPEC §1).

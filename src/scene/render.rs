@@ -168,6 +168,7 @@ impl SceneRenderer {
                 lights: &scene.lights,
                 environment,
                 environment_model: scene.render.environment_model,
+                shadows: scene.render.traces_shadows(gpu),
                 background: scene.output.background,
             },
             &gpu_meshes,

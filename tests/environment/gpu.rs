@@ -276,6 +276,7 @@ fn render_sphere(
                 lights: &[],
                 environment: Some(&env),
                 environment_model: Default::default(),
+                shadows: false,
                 background: Background::Transparent,
             },
             &RenderSettings {
@@ -505,6 +506,7 @@ fn an_uploaded_environment_reads_back_identical_texels_and_renders_the_same() {
                     lights: &[],
                     environment: Some(environment),
                     environment_model: Default::default(),
+                    shadows: false,
                     background: Background::Environment,
                 },
                 &RenderSettings {

@@ -47,6 +47,11 @@ shader_interface! {
         /// `Frame::layer_first_texel[k]`), RGBA32F: what the `brdf` model's lobe samples read
         /// (brdf_environment.glsl).
         ENV_LAYER_TEXELS_BINDING: u32 = 7;
+        /// The ray-traced shading pass (shade_rt*.frag): the draw's top-level acceleration
+        /// structure, for SPEC §6's visibility.
+        SCENE_TLAS_BINDING: u32 = 11;
+        /// ... and per object its mesh's vertex and index buffer addresses (ray_surface.glsl).
+        OBJECT_GEOMETRY_BINDING: u32 = 12;
 
         /// A prefilter step's set 0: the cube (or, for step 1, the equirect) it reads as a texel
         /// buffer, the cube it writes, and step 1's near-edge list (`NearHeader`, then texels).

@@ -2,10 +2,14 @@
 //! and drawn by any number of renders (the scene renderer caches them per `Arc<Mesh>`).
 
 use crate::gpu::shaders::interface::{VERTEX_NORMAL_LOCATION, VERTEX_POSITION_LOCATION};
-use crate::gpu::{Buffer, BufferDesc, BufferUsage, GpuContext, VertexAttribute};
+use crate::gpu::{
+    AccelerationStructure, Buffer, BufferDesc, BufferUsage, GpuContext, TriangleGeometry,
+    VertexAttribute,
+};
 use crate::raster::mesh::Mesh;
 use crate::Result;
 use std::mem::{offset_of, size_of};
+use std::sync::OnceLock;
 
 /// One vertex of the interleaved buffer mesh.vert reads.
 #[repr(C)]
@@ -35,6 +39,10 @@ pub struct GpuMesh {
     pub(crate) vertices: Buffer,
     pub(crate) indices: Buffer,
     pub(crate) index_count: u32,
+    vertex_count: u32,
+    /// Its bottom-level acceleration structure, built by the first ray-traced draw and kept as
+    /// long as the mesh: [`GpuMesh::bottom_level`].
+    bottom_level: OnceLock<AccelerationStructure>,
 }
 
 impl GpuMesh {
@@ -47,16 +55,68 @@ impl GpuMesh {
             .zip(&mesh.normals)
             .map(|(&position, &normal)| Vertex { position, normal })
             .collect();
+        // With ray queries the buffers are also an acceleration-structure build's input.
+        let usage = |usage| match gpu.info().ray_query.is_enabled() {
+            true => usage | BufferUsage::ACCELERATION_INPUT,
+            false => usage,
+        };
         Ok(GpuMesh {
-            vertices: upload(gpu, "mesh vertices", &vertices, BufferUsage::VERTEX)?,
-            indices: upload(gpu, "mesh indices", &mesh.indices, BufferUsage::INDEX)?,
+            vertices: upload(gpu, "mesh vertices", &vertices, usage(BufferUsage::VERTEX))?,
+            indices: upload(
+                gpu,
+                "mesh indices",
+                &mesh.indices,
+                usage(BufferUsage::INDEX),
+            )?,
             index_count: mesh.indices.len() as u32,
+            vertex_count: vertices.len() as u32,
+            bottom_level: OnceLock::new(),
         })
     }
 
-    /// Bytes of device memory the mesh holds.
+    /// Triangles of the mesh.
+    pub fn triangle_count(&self) -> u32 {
+        self.index_count / 3
+    }
+
+    /// Bytes of device memory the mesh holds (with its acceleration structure, once built).
     pub fn byte_size(&self) -> u64 {
-        self.vertices.size() + self.indices.size()
+        self.vertices.size()
+            + self.indices.size()
+            + self.bottom_level.get().map_or(0, |b| b.byte_size())
+    }
+
+    /// The vertex and index buffers' device addresses as (low, high) u32 pairs, for shaders
+    /// that read the triangles (a device with ray queries only).
+    pub(crate) fn addresses(&self) -> Result<[u32; 4]> {
+        let vertices = self.vertices.device_address()?;
+        let indices = self.indices.device_address()?;
+        Ok([
+            vertices as u32,
+            (vertices >> 32) as u32,
+            indices as u32,
+            (indices >> 32) as u32,
+        ])
+    }
+
+    /// The mesh's bottom-level acceleration structure, built on first use (a device with ray
+    /// queries only) and kept with the mesh, so a batch that draws the same mesh many times
+    /// builds it once.
+    pub fn bottom_level(&self, gpu: &GpuContext) -> Result<&AccelerationStructure> {
+        if let Some(built) = self.bottom_level.get() {
+            return Ok(built);
+        }
+        let built = gpu.build_bottom_level(
+            "mesh bottom-level structure",
+            &TriangleGeometry {
+                vertices: &self.vertices,
+                vertex_count: self.vertex_count,
+                vertex_stride: VERTEX_STRIDE,
+                indices: &self.indices,
+                triangle_count: self.triangle_count(),
+            },
+        )?;
+        Ok(self.bottom_level.get_or_init(|| built))
     }
 }
 

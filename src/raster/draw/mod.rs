@@ -46,7 +46,10 @@ use crate::environment::brdf_quadrature::AlbedoCache;
 use crate::environment::gpu::GpuEnvironment;
 use crate::environment::{CubeImage, EnvironmentModel, PrefilteredEnvironment};
 use crate::gpu::shaders::interface::Frame;
-use crate::gpu::{Buffer, DescriptorSet, GpuContext, GraphicsPipeline, Sampler, TimestampPool};
+use crate::gpu::{
+    AccelerationStructure, Buffer, BufferUsage, DescriptorSet, GpuContext, GraphicsPipeline,
+    Instance, Sampler, TimestampPool,
+};
 use crate::output::HdrImage;
 use crate::raster::camera::PixelRect;
 use crate::{Error, Result};
@@ -291,10 +294,13 @@ fn draw_deferred(
 ) -> Result<(HdrImage, Option<DrawTimings>)> {
     let DrawInputs { gpu, scene, .. } = *inputs;
     let environment_background = scene.background == Background::Environment;
-    let gbuffer = pipelines.get(gpu, inputs.key(PipelineKind::GBuffer))?;
+    let gbuffer = pipelines.get(gpu, inputs.key(PipelineKind::GBuffer(scene.shadows)))?;
     let coverage = pipelines.get(
         gpu,
-        inputs.key(PipelineKind::Coverage(environment_background)),
+        inputs.key(PipelineKind::Coverage(
+            environment_background,
+            scene.shadows,
+        )),
     )?;
     let shade = pipelines.get(
         gpu,
@@ -302,8 +308,18 @@ fn draw_deferred(
             environment_background,
             fresnel_pow2_grid,
             environment_model: scene.environment_model,
+            ray_traced: scene.shadows,
         })),
     )?;
+    // The draw's top-level structure over the objects' meshes (each mesh's bottom level is
+    // built once and kept with it).
+    let traced = match scene.shadows {
+        true => Some((
+            top_level(gpu, inputs.meshes)?,
+            object_geometry(gpu, inputs.meshes)?,
+        )),
+        false => None,
+    };
     // The `paper` model never reads the layer texels: any texel buffer fills the binding.
     let layer_texels = match scene.environment_model {
         EnvironmentModel::Brdf => inputs.environment.layer_texels(gpu)?,
@@ -320,6 +336,7 @@ fn draw_deferred(
         (inputs.environment, layer_texels),
         inputs.sampler,
         gbuffer_images,
+        traced.as_ref().map(|(scene, geometry)| (scene, geometry)),
     )?;
     let passes = DeferredPasses {
         gbuffer: &gbuffer,
@@ -331,6 +348,7 @@ fn draw_deferred(
         // The environment background is drawn by the coverage pass.
         coverage_everywhere: environment_background,
         clear_color: scene.background.clear_color(),
+        ray_traced: scene.shadows,
     };
     let settings = inputs.settings;
     let mut timings = inputs.stamps.map(|_| DrawTimings::default());
@@ -389,6 +407,31 @@ fn draw_forward(
         inputs.add_strip_timings(&mut timings)?;
     }
     read_back(&targets.readback, settings, timings)
+}
+
+/// A top-level acceleration structure over `meshes` (instance i is object i; meshes without
+/// triangles are left out).
+fn top_level(gpu: &GpuContext, meshes: &[&GpuMesh]) -> Result<AccelerationStructure> {
+    let mut instances = Vec::with_capacity(meshes.len());
+    for (index, mesh) in meshes.iter().enumerate() {
+        if mesh.triangle_count() > 0 {
+            instances.push(Instance {
+                geometry: mesh.bottom_level(gpu)?,
+                custom_index: index as u32,
+            });
+        }
+    }
+    Ok(gpu.build_top_level("scene top-level structure", &instances)?)
+}
+
+/// Per object, its mesh's vertex and index buffer addresses (low, high words), as
+/// ray_surface.glsl reads them at `OBJECT_GEOMETRY_BINDING`.
+fn object_geometry(gpu: &GpuContext, meshes: &[&GpuMesh]) -> Result<Buffer> {
+    let rows = meshes
+        .iter()
+        .map(|mesh| mesh.addresses())
+        .collect::<Result<Vec<[u32; 4]>>>()?;
+    gpu_mesh::upload(gpu, "object geometry", &rows, BufferUsage::STORAGE)
 }
 
 fn read_back(

@@ -61,6 +61,8 @@ pub(crate) struct DeferredPasses<'a> {
     /// only `shaded`.
     pub coverage_everywhere: bool,
     pub clear_color: [f32; 4],
+    /// The shading pass traces rays: its top-level structure was built by an earlier submit.
+    pub ray_traced: bool,
 }
 
 /// What the forward draw's pass draws with, the same for every strip.
@@ -92,6 +94,11 @@ pub(crate) fn record_deferred(
     gpu.submit_and_wait(|rec| {
         mark(rec, stamps, 0);
         deferred_barriers(rec, targets);
+        if passes.ray_traced {
+            // The acceleration-structure builds (earlier submits) before the shading pass's
+            // ray queries.
+            rec.memory_barrier(Access::AccelerationStructureBuild, Access::RayQuery);
+        }
         mark(rec, stamps, 1);
         gbuffer_pass(rec, targets, passes, strip);
         shading_pass(rec, targets, passes, strip);

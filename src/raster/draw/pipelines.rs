@@ -11,11 +11,11 @@ use crate::gpu::shaders::interface::{
     DrawConstants, BACKGROUND_COLOR, BACKGROUND_ENVIRONMENT, ENV_IRRADIANCE_BINDING,
     ENV_LAYERS_BINDING, ENV_LAYER_TEXELS_BINDING, ENV_MODEL_BRDF, ENV_MODEL_PAPER, FRAME_BINDING,
     FRESNEL_KNOTS_BINDING, GBUFFER_NORMAL_BINDING, GBUFFER_POSITION_BINDING, MAX_ENV_LAYERS,
-    OBJECT_MATERIAL_BINDING,
+    OBJECT_GEOMETRY_BINDING, OBJECT_MATERIAL_BINDING, SCENE_TLAS_BINDING,
 };
 use crate::gpu::{
-    Binding, BindingKind, Buffer, DepthCompare, DepthTest, DescriptorSet, Format, GpuContext,
-    GraphicsPipeline, GraphicsPipelineDesc, Image, Resource, Sampler,
+    AccelerationStructure, Binding, BindingKind, Buffer, DepthCompare, DepthTest, DescriptorSet,
+    Format, GpuContext, GraphicsPipeline, GraphicsPipelineDesc, Image, Resource, Sampler,
 };
 use crate::Result;
 use std::collections::hash_map::Entry;
@@ -35,9 +35,10 @@ const GRAPHICS_BINDINGS: [Binding; 3] = [
 ];
 
 /// The shading pass's set (coverage_body.glsl, shade_body.glsl): the frame, the Fresnel knots,
-/// the environment (its layers also as texels, for the `brdf` model), the materials and the
-/// G-buffer.
-const SHADE_BINDINGS: [Binding; 8] = [
+/// the environment (its layers also as texels, for the `brdf` model), the materials, the
+/// G-buffer, and in the ray-traced pipelines (the last two bindings) the draw's top-level
+/// structure and its objects' mesh addresses.
+const SHADE_BINDINGS_TRACED: [Binding; 10] = [
     Binding::new(FRAME_BINDING, BindingKind::UniformBuffer),
     Binding::new(FRESNEL_KNOTS_BINDING, BindingKind::UniformTexelBuffer),
     Binding::array(
@@ -50,7 +51,20 @@ const SHADE_BINDINGS: [Binding; 8] = [
     Binding::new(GBUFFER_POSITION_BINDING, BindingKind::SampledImage),
     Binding::new(GBUFFER_NORMAL_BINDING, BindingKind::SampledImage),
     Binding::new(ENV_LAYER_TEXELS_BINDING, BindingKind::UniformTexelBuffer),
+    Binding::new(SCENE_TLAS_BINDING, BindingKind::AccelerationStructure),
+    Binding::new(OBJECT_GEOMETRY_BINDING, BindingKind::StorageBuffer),
 ];
+
+/// [`SHADE_BINDINGS_TRACED`] without the acceleration structure.
+const SHADE_BINDINGS: &[Binding] = SHADE_BINDINGS_TRACED.split_at(8).0;
+
+/// The shading pass's bindings (coverage and shade pipelines share one set).
+fn shade_bindings(ray_traced: bool) -> &'static [Binding] {
+    match ray_traced {
+        true => &SHADE_BINDINGS_TRACED,
+        false => SHADE_BINDINGS,
+    }
+}
 
 /// The specialization constants of a shading pipeline that depend on the draw.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -61,6 +75,8 @@ pub(super) struct ShadeVariant {
     pub fresnel_pow2_grid: bool,
     /// SPEC §4's environment model.
     pub environment_model: EnvironmentModel,
+    /// Lights with ray-query visibility (SPEC §6): shade_rt*.frag and their bindings.
+    pub ray_traced: bool,
 }
 
 /// Whether a table's knots (as the shader reads them, f32) lie at exactly i·step degrees from 0
@@ -81,12 +97,14 @@ pub(super) fn fresnel_on_pow2_grid(knots: &[[f32; 4]]) -> bool {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(super) enum PipelineKind {
-    /// The lacquer draw's geometry pass (gbuffer.frag), multisampled.
-    GBuffer,
+    /// The lacquer draw's geometry pass (gbuffer.frag), multisampled. `true`: it keeps each
+    /// sample's triangle for the ray-traced shading pass (gbuffer_rt.frag).
+    GBuffer(bool),
     /// The shading pass's first draw (coverage_body.glsl), single-sampled, reading a G-buffer
-    /// of the key's sample count. `true`: the environment is the background (then it writes
-    /// colour).
-    Coverage(bool),
+    /// of the key's sample count. First field: the environment is the background (then it
+    /// writes colour). The second field: the shading pass traces rays, so the set (shared with Shade) has the
+    /// acceleration structure too.
+    Coverage(bool, bool),
     /// The shading pass's second draw (shade_body.glsl); keyed like Coverage.
     Shade(ShadeVariant),
     /// The benchmark's forward draw (trivial.frag).
@@ -109,8 +127,9 @@ impl PipelineKey {
     fn constants(&self) -> DrawConstants {
         let variant = match self.kind {
             PipelineKind::Shade(variant) => variant,
-            PipelineKind::Coverage(environment_background) => ShadeVariant {
+            PipelineKind::Coverage(environment_background, ray_traced) => ShadeVariant {
                 environment_background,
+                ray_traced,
                 ..ShadeVariant::default()
             },
             _ => ShadeVariant::default(),
@@ -136,20 +155,26 @@ impl PipelineKey {
         use crate::gpu::shaders::*;
         let multisampled = self.samples > 1;
         match self.kind {
-            PipelineKind::GBuffer => {
-                self.mesh("gbuffer", GBUFFER_FRAG, &GBUFFER_FORMATS, constants)
-            }
+            PipelineKind::GBuffer(ray_traced) => self.mesh(
+                "gbuffer",
+                match ray_traced {
+                    true => GBUFFER_RT_FRAG,
+                    false => GBUFFER_FRAG,
+                },
+                &GBUFFER_FORMATS,
+                constants,
+            ),
             PipelineKind::Trivial => self.mesh("trivial", TRIVIAL_FRAG, &COLOR_FORMAT, constants),
             // Writes 0 (covered) or 1 (the clear value, passing as equal so the background colour
             // is written too) into the coverage depth.
-            PipelineKind::Coverage(_) => self.full_screen(
+            PipelineKind::Coverage(_, ray_traced) => self.full_screen(
                 "coverage",
                 if multisampled {
                     COVERAGE_MS_FRAG
                 } else {
                     COVERAGE_FRAG
                 },
-                (&SHADE_BINDINGS, 1),
+                (shade_bindings(ray_traced), 1),
                 Some(DepthTest {
                     compare: DepthCompare::LessOrEqual,
                     write: true,
@@ -157,14 +182,15 @@ impl PipelineKey {
                 constants,
             ),
             // 1 > 0 passes where a sample is covered; early, so uncovered blocks are skipped.
-            PipelineKind::Shade(_) => self.full_screen(
+            PipelineKind::Shade(variant) => self.full_screen(
                 "shade",
-                if multisampled {
-                    SHADE_MS_FRAG
-                } else {
-                    SHADE_FRAG
+                match (variant.ray_traced, multisampled) {
+                    (false, false) => SHADE_FRAG,
+                    (false, true) => SHADE_MS_FRAG,
+                    (true, false) => SHADE_RT_FRAG,
+                    (true, true) => SHADE_RT_MS_FRAG,
                 },
-                (&SHADE_BINDINGS, 1),
+                (shade_bindings(variant.ray_traced), 1),
                 Some(DepthTest {
                     compare: DepthCompare::Greater,
                     write: false,
@@ -231,7 +257,7 @@ impl PipelineKey {
             depth_test,
             fragment_constants: constants.words(),
             // A colour background is the clear colour: coverage.frag writes only depth.
-            color_writes: self.kind != PipelineKind::Coverage(false),
+            color_writes: !matches!(self.kind, PipelineKind::Coverage(false, _)),
         }
     }
 }
@@ -299,7 +325,8 @@ pub(super) fn graphics_set(
 
 /// A set of [`SHADE_BINDINGS`]: the draw's buffers, the environment (`layer_texels`: its
 /// [`GpuEnvironment::layer_texels`] in the `brdf` model, any texel buffer in the `paper` model,
-/// which never reads it) and the G-buffer.
+/// which never reads it) and the G-buffer; with `traced` (the top-level structure and the
+/// objects' mesh addresses), of [`SHADE_BINDINGS_TRACED`].
 pub(super) fn shade_set(
     gpu: &GpuContext,
     pipeline: &GraphicsPipeline,
@@ -307,38 +334,41 @@ pub(super) fn shade_set(
     (environment, layer_texels): (&GpuEnvironment, &Buffer),
     sampler: &Sampler,
     (position, normal): (&Image, &Image),
+    traced: Option<(&AccelerationStructure, &Buffer)>,
 ) -> Result<DescriptorSet> {
-    Ok(gpu.create_descriptor_set(
-        pipeline.layout(),
-        &[
-            (FRAME_BINDING, Resource::Buffer(&buffers.scene_frame)),
-            (FRESNEL_KNOTS_BINDING, Resource::TexelBuffer(&buffers.knots)),
-            (
-                ENV_LAYERS_BINDING,
-                Resource::SampledImages(layer_images(environment), sampler),
-            ),
-            (
-                ENV_IRRADIANCE_BINDING,
-                Resource::SampledImage(&environment.irradiance, sampler),
-            ),
-            (
-                OBJECT_MATERIAL_BINDING,
-                Resource::TexelBuffer(&buffers.materials),
-            ),
-            (
-                GBUFFER_POSITION_BINDING,
-                Resource::SampledImage(position, sampler),
-            ),
-            (
-                GBUFFER_NORMAL_BINDING,
-                Resource::SampledImage(normal, sampler),
-            ),
-            (
-                ENV_LAYER_TEXELS_BINDING,
-                Resource::TexelBuffer(layer_texels),
-            ),
-        ],
-    )?)
+    let mut resources = vec![
+        (FRAME_BINDING, Resource::Buffer(&buffers.scene_frame)),
+        (FRESNEL_KNOTS_BINDING, Resource::TexelBuffer(&buffers.knots)),
+        (
+            ENV_LAYERS_BINDING,
+            Resource::SampledImages(layer_images(environment), sampler),
+        ),
+        (
+            ENV_IRRADIANCE_BINDING,
+            Resource::SampledImage(&environment.irradiance, sampler),
+        ),
+        (
+            OBJECT_MATERIAL_BINDING,
+            Resource::TexelBuffer(&buffers.materials),
+        ),
+        (
+            GBUFFER_POSITION_BINDING,
+            Resource::SampledImage(position, sampler),
+        ),
+        (
+            GBUFFER_NORMAL_BINDING,
+            Resource::SampledImage(normal, sampler),
+        ),
+        (
+            ENV_LAYER_TEXELS_BINDING,
+            Resource::TexelBuffer(layer_texels),
+        ),
+    ];
+    if let Some((scene, geometry)) = traced {
+        resources.push((SCENE_TLAS_BINDING, Resource::AccelerationStructure(scene)));
+        resources.push((OBJECT_GEOMETRY_BINDING, Resource::Buffer(geometry)));
+    }
+    Ok(gpu.create_descriptor_set(pipeline.layout(), &resources)?)
 }
 
 #[cfg(test)]

@@ -77,6 +77,9 @@ pub struct DrawScene<'a> {
     pub environment: Option<&'a GpuEnvironment>,
     /// How the environment lights them (SPEC §4).
     pub environment_model: EnvironmentModel,
+    /// Lights with visibility (SPEC §6): shadow rays by ray queries. Needs a device with ray
+    /// queries ([`RayQuery`](crate::gpu::RayQuery)); refused without.
+    pub shadows: bool,
     pub background: Background,
 }
 
@@ -160,6 +163,17 @@ pub(crate) fn validate(
                 format!("at most {MAX_ENV_LAYERS} environment layers"),
             ));
         }
+    }
+    if scene.shadows && !gpu.info().ray_query.is_enabled() {
+        return Err(Error::invalid(
+            "shadows",
+            true,
+            format!(
+                "shadows need ray queries; {} has: {}. Draw without shadows",
+                gpu.info().name,
+                gpu.info().ray_query.summary()
+            ),
+        ));
     }
     scene.camera.validate()?;
     for light in scene.lights {

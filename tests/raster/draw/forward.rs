@@ -124,6 +124,7 @@ fn render_both(
                 lights: &lights,
                 environment: None,
                 environment_model: Default::default(),
+                shadows: false,
                 background: Background::Transparent,
             },
             &RenderSettings {

@@ -1,2 +1,3 @@
 mod deferred;
 mod forward;
+mod shadows;

@@ -1,0 +1,83 @@
+// Where rays leave a shaded surface point (SPEC §6), from the triangle the G-buffer names: the
+// triangle's vertices come from its mesh's buffers by device address (OBJECT_GEOMETRY_BINDING
+// holds, per object, the vertex and index buffers' addresses), so the shading pass needs no
+// extra G-buffer target.
+//
+// The CPU twin is `oracle::shadows::ray_surface`: keep the two alike.
+
+#ifndef RAY_SURFACE_GLSL
+#define RAY_SURFACE_GLSL
+
+// The point rays start from and the triangle's unit geometric normal, turned to the side of the
+// shading normal.
+struct RaySurface {
+    vec3 point;
+    vec3 geometric_normal;
+};
+
+#ifdef RAY_TRACING
+// GpuMesh's interleaved vertices (position, normal: six floats) and u32 indices.
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer MeshVertices {
+    float values[];
+};
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer MeshIndices {
+    uint values[];
+};
+// Per object: (vertex address low, high, index address low, high).
+layout(set = 0, binding = OBJECT_GEOMETRY_BINDING, std430) readonly buffer ObjectGeometry {
+    uvec4 object_geometry[];
+};
+
+// The surface of triangle `triangle` of `object` at the G-buffer point `position` with unit
+// shading normal `n`.
+//
+// 1. The G-buffer point is interpolated at the pixel centre, which for a multisampled edge pixel
+//    may lie outside the triangle, on its plane extended, below a concave neighbour: its
+//    barycentrics are clamped into the triangle.
+// 2. On a smooth mesh the flat triangle lies inside the smooth surface its normals describe, and
+//    rays towards a light low over the surface hit the neighbouring triangles (the "shadow
+//    terminator"): the point is lifted onto the smooth surface as in Hanika, "Hacking the Shadow
+//    Terminator" (Ray Tracing Gems II, ch. 4): p' = p − Σ b_i·min(0, (p − p_i)·n_i)·n_i.
+RaySurface ray_surface(int object, int triangle, vec3 position, vec3 n) {
+    uvec4 addresses = object_geometry[object];
+    MeshVertices vertices = MeshVertices(addresses.xy);
+    MeshIndices indices = MeshIndices(addresses.zw);
+    vec3 p[3];
+    vec3 normal[3];
+    for (int k = 0; k < 3; ++k) {
+        uint first = 6u * indices.values[3 * triangle + k];
+        p[k] = vec3(vertices.values[first], vertices.values[first + 1u],
+            vertices.values[first + 2u]);
+        normal[k] = normalize(vec3(vertices.values[first + 3u], vertices.values[first + 4u],
+            vertices.values[first + 5u]));
+    }
+    vec3 e1 = p[1] - p[0];
+    vec3 e2 = p[2] - p[0];
+    vec3 cross_e = cross(e1, e2);
+    float area2 = dot(cross_e, cross_e);
+    RaySurface surface;
+    if (!(area2 > 0.0)) {
+        // A degenerate triangle (never rasterised with area, but keep the maths finite).
+        surface.point = position;
+        surface.geometric_normal = n;
+        return surface;
+    }
+    vec3 ng = cross_e * inversesqrt(area2);
+    surface.geometric_normal = dot(ng, n) < 0.0 ? -ng : ng;
+    // Barycentrics of the point's projection onto the plane, clamped into the triangle.
+    vec3 d = position - p[0];
+    float b1 = dot(cross(d, e2), cross_e) / area2;
+    float b2 = dot(cross(e1, d), cross_e) / area2;
+    vec3 b = max(vec3(1.0 - b1 - b2, b1, b2), vec3(0.0));
+    b /= b.x + b.y + b.z;
+    vec3 inside = b.x * p[0] + b.y * p[1] + b.z * p[2];
+    vec3 lifted = inside;
+    for (int k = 0; k < 3; ++k) {
+        lifted -= b[k] * min(0.0, dot(inside - p[k], normal[k])) * normal[k];
+    }
+    surface.point = lifted;
+    return surface;
+}
+#endif
+
+#endif

@@ -1,0 +1,70 @@
+// SPEC §6's vis(x, L): whether anything lies between a shaded point and a light, by a ray query
+// against the draw's top-level acceleration structure (SCENE_TLAS_BINDING). Only the ray-traced
+// shading pipelines (shade_rt*.frag, which enable GL_EXT_ray_query) define RAY_TRACING; the
+// others see every light.
+//
+// The CPU twin is `oracle::shadows` (same offset, same ray): keep the two alike.
+
+#ifndef VISIBILITY_GLSL
+#define VISIBILITY_GLSL
+
+#include "ray_surface.glsl"
+
+#ifdef RAY_TRACING
+layout(set = 0, binding = SCENE_TLAS_BINDING) uniform accelerationStructureEXT scene_tlas;
+
+// Far enough for a directional light ("to infinity") and finite for every implementation.
+const float RAY_FAR = 1e30;
+
+// The ray origin for leaving the surface at `p` on the side `n` points to: Wächter & Binder's
+// bound (Ray Tracing Gems, ch. 6). The G-buffer position is a rasteriser-interpolated point whose
+// error is a few ulps of its coordinates, so the origin moves 256 ulps (relative to each
+// coordinate) along n; near the world origin, where ulps vanish but the interpolation error of
+// the triangle's vertices does not, by 2^-16 absolute instead (below 1/32).
+vec3 offset_ray_origin(vec3 p, vec3 n) {
+    ivec3 ulps = ivec3(256.0 * n);
+    vec3 moved = vec3(
+        intBitsToFloat(floatBitsToInt(p.x) + (p.x < 0.0 ? -ulps.x : ulps.x)),
+        intBitsToFloat(floatBitsToInt(p.y) + (p.y < 0.0 ? -ulps.y : ulps.y)),
+        intBitsToFloat(floatBitsToInt(p.z) + (p.z < 0.0 ? -ulps.z : ulps.z)));
+    vec3 near_origin = p + n * (1.0 / 65536.0);
+    return vec3(
+        abs(p.x) < 1.0 / 32.0 ? near_origin.x : moved.x,
+        abs(p.y) < 1.0 / 32.0 ? near_origin.y : moved.y,
+        abs(p.z) < 1.0 / 32.0 ? near_origin.z : moved.z);
+}
+
+// Nothing is hit along origin + t·direction for t in [0, t_max].
+bool unoccluded(vec3 origin, vec3 direction, float t_max) {
+    rayQueryEXT query;
+    rayQueryInitializeEXT(query, scene_tlas,
+        gl_RayFlagsTerminateOnFirstHitEXT | gl_RayFlagsOpaqueEXT, 0xff,
+        origin, 0.0, direction, t_max);
+    // Every geometry is opaque: the query has no candidates to confirm.
+    while (rayQueryProceedEXT(query)) {
+    }
+    return rayQueryGetIntersectionTypeEXT(query, true) == gl_RayQueryCommittedIntersectionNoneEXT;
+}
+#endif
+
+// 1 when light `light_vector` (Frame::light_vector: w = 0 directional, 1 point) is seen from
+// `surface` (ray_surface.glsl), else 0. The ray leaves on the side of the geometric normal the
+// light is on.
+float light_visibility(RaySurface surface, vec4 light_vector) {
+#ifdef RAY_TRACING
+    vec3 towards = light_vector.w == 0.0 ? light_vector.xyz : light_vector.xyz - surface.point;
+    vec3 side = dot(towards, surface.geometric_normal) < 0.0 ? -surface.geometric_normal
+                                                              : surface.geometric_normal;
+    vec3 origin = offset_ray_origin(surface.point, side);
+    if (light_vector.w == 0.0) {
+        return unoccluded(origin, normalize(light_vector.xyz), RAY_FAR) ? 1.0 : 0.0;
+    }
+    vec3 to_light = light_vector.xyz - origin;
+    float distance = length(to_light);
+    return unoccluded(origin, to_light / distance, distance) ? 1.0 : 0.0;
+#else
+    return 1.0;
+#endif
+}
+
+#endif

@@ -1,0 +1,7 @@
+#version 460
+#extension GL_EXT_ray_query : require
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
+// The lacquer shading pass for single-sampled draws, with ray-query shadows (SPEC §6).
+#define RAY_TRACING
+#include "shade_body.glsl"
