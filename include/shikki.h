@@ -454,6 +454,21 @@ enum ShikkiStatus shikki_scene_set_environment_model(struct ShikkiScene scene, u
 // `model` is valid for one write.
 enum ShikkiStatus shikki_scene_get_environment_model(struct ShikkiScene scene, uint32_t *model);
 
+// Light between objects (scene files' `[render] shadows` and `ray_tracing`, SPEC §6):
+// `shadows` non-zero traces shadow rays to the lights; `ray_tracing` zero shades every object as
+// if it were alone (the image of a device without ray queries). Both are on by default; on a
+// device without ray queries neither has an effect, and the renderer's warning callback says
+// so once.
+enum ShikkiStatus shikki_scene_set_light_transport(struct ShikkiScene scene, int32_t shadows, int32_t ray_tracing);
+
+// The scene's light-transport switches (1 on, 0 off), as set by
+// `shikki_scene_set_light_transport` or the scene TOML's `[render]` table (either pointer may
+// be NULL).
+//
+// # Safety
+// `shadows` and `ray_tracing` are NULL or valid for one write.
+enum ShikkiStatus shikki_scene_get_light_transport(struct ShikkiScene scene, int32_t *shadows, int32_t *ray_tracing);
+
 // The render size of the scene, so the caller can size its buffer (either pointer may be NULL).
 //
 // # Safety

@@ -82,6 +82,9 @@ pub enum Warning {
     CacheFileNotUploaded { path: PathBuf, reason: String },
     /// The prefiltered environment could not be stored in the cache (the render went on).
     CacheNotWritten { reason: String },
+    /// A scene asked for light between objects (SPEC §6) on a device without ray queries: it
+    /// was drawn without (once per renderer). `message` says what is missing and what to install.
+    NoRayQueries { message: String },
 }
 
 impl std::fmt::Display for Warning {
@@ -105,6 +108,7 @@ impl std::fmt::Display for Warning {
             Warning::CacheNotWritten { reason } => {
                 write!(f, "the prefiltered environment was not cached: {reason}")
             }
+            Warning::NoRayQueries { message } => f.write_str(message),
         }
     }
 }

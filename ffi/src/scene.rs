@@ -433,6 +433,52 @@ pub unsafe extern "C" fn shikki_scene_get_environment_model(
     })
 }
 
+/// Light between objects (scene files' `[render] shadows` and `ray_tracing`, SPEC §6):
+/// `shadows` non-zero traces shadow rays to the lights; `ray_tracing` zero shades every object as
+/// if it were alone (the image of a device without ray queries). Both are on by default; on a
+/// device without ray queries neither has an effect, and the renderer's warning callback says
+/// so once.
+#[no_mangle]
+pub extern "C" fn shikki_scene_set_light_transport(
+    scene: ShikkiScene,
+    shadows: i32,
+    ray_tracing: i32,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        with_scene(scene, |state| {
+            state.render.shadows = shadows != 0;
+            state.render.ray_tracing = ray_tracing != 0;
+            Ok(())
+        })
+    })
+}
+
+/// The scene's light-transport switches (1 on, 0 off), as set by
+/// `shikki_scene_set_light_transport` or the scene TOML's `[render]` table (either pointer may
+/// be NULL).
+///
+/// # Safety
+/// `shadows` and `ray_tracing` are NULL or valid for one write.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_scene_get_light_transport(
+    scene: ShikkiScene,
+    shadows: *mut i32,
+    ray_tracing: *mut i32,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        let spec = with_scene(scene, |state| Ok(state.render))?;
+        if !shadows.is_null() {
+            // SAFETY: non-NULL; writable by contract.
+            unsafe { write_out(shadows, "shadows", i32::from(spec.shadows)) }?;
+        }
+        if !ray_tracing.is_null() {
+            // SAFETY: non-NULL; writable by contract.
+            unsafe { write_out(ray_tracing, "ray_tracing", i32::from(spec.ray_tracing)) }?;
+        }
+        Ok(())
+    })
+}
+
 /// The render size of the scene, so the caller can size its buffer (either pointer may be NULL).
 ///
 /// # Safety

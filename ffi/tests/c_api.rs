@@ -12,6 +12,8 @@
 //! - `environment_model.c`: `shikki_scene_set_environment_model` — BRDF renders differently from
 //!   PAPER, the scene TOML's `[render] environment_model` reaches the handle, an unknown model
 //!   number is refused with a message naming the valid ones;
+//! - `light_transport.c`: `shikki_scene_set_light_transport` — shadows on by default, off by the
+//!   call or the scene TOML, and ray tracing off giving the image without shadows;
 //! - `large_environment.c`: an 8192 × 4096 HDRI (written here) renders through the C API as it
 //!   does through the CLI, to the bytes of the Rust API's render; the environment disk cache and
 //!   the warning callback;
@@ -133,6 +135,7 @@ impl Programs {
         programs.compile("threads", "threads", Link::Shared);
         programs.compile("large_environment", "large_environment", Link::Shared);
         programs.compile("environment_model", "environment_model", Link::Shared);
+        programs.compile("light_transport", "light_transport", Link::Shared);
         if slow_checks_enabled() {
             programs.compile("error_paths", "error_paths_asan", Link::SharedSanitized);
             programs.compile("threads", "threads_asan", Link::SharedSanitized);
@@ -285,6 +288,16 @@ fn c_threads_render_identical_images_and_keep_their_errors_apart() {
     let programs = Programs::get();
     let output = run(&mut programs.command("threads"));
     assert_all_checks_passed("threads", &output);
+}
+
+/// Shadows from C: on by default, a shadow on the board under a sphere, none with
+/// `shikki_scene_set_light_transport(scene, 0, 1)`, the same bytes with ray tracing off, and the
+/// scene TOML's `[render] shadows` reaching the handle.
+#[test]
+fn c_light_transport_switches_shadows() {
+    let programs = Programs::get();
+    let output = run(&mut programs.command("light_transport"));
+    assert_all_checks_passed("light_transport", &output);
 }
 
 /// The environment model from C: `SHIKKI_ENV_MODEL_BRDF` renders a 32 × 32 sphere differently

@@ -7,6 +7,7 @@ use crate::environment::EnvironmentModel;
 use crate::output::ToneCurve;
 use crate::raster::draw::Background;
 use crate::raster::mesh::{BuiltinMesh, BUILTIN_SEGMENTS};
+use crate::scene::RenderSpec;
 use crate::{Error, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use glam::DVec3;
@@ -136,6 +137,40 @@ pub struct RenderArgs {
     /// With a scene file it overrides `[render] environment_model`.
     #[arg(long = "env-model", value_parser = parse_env_model)]
     pub env_model: Option<EnvironmentModel>,
+    /// Lights seen from everywhere: no shadow rays (SPEC §6). With a scene file it overrides
+    /// `[render] shadows`.
+    #[arg(long = "no-shadows")]
+    pub no_shadows: bool,
+    /// No ray tracing at all: every object shaded as if it were alone, the image of a device
+    /// without ray queries. With a scene file it overrides `[render] ray_tracing`.
+    #[arg(long = "no-ray-tracing")]
+    pub no_ray_tracing: bool,
+}
+
+impl RenderArgs {
+    /// The `[render]` settings these flags override, as scene paths and values (`--set`).
+    pub fn render_overrides(&self) -> Vec<String> {
+        let mut sets = Vec::new();
+        if let Some(model) = self.env_model {
+            sets.push(format!("render.environment_model={}", model.name()));
+        }
+        if self.no_shadows {
+            sets.push("render.shadows=false".into());
+        }
+        if self.no_ray_tracing {
+            sets.push("render.ray_tracing=false".into());
+        }
+        sets
+    }
+
+    /// The same overrides applied to a scene built without a file.
+    pub fn apply_render_overrides(&self, spec: &mut RenderSpec) {
+        if let Some(model) = self.env_model {
+            spec.environment_model = model;
+        }
+        spec.shadows &= !self.no_shadows;
+        spec.ray_tracing &= !self.no_ray_tracing;
+    }
 }
 
 /// The environment light (SPEC §4).
@@ -308,6 +343,8 @@ impl Default for RenderArgs {
                 },
                 background: Background::Environment,
                 env_model: None,
+                no_shadows: false,
+                no_ray_tracing: false,
             },
         }
     }

@@ -24,11 +24,9 @@ pub fn run(cli: Cli) -> Result<()> {
         None => scene_cmd::render_default(&RenderArgs::default()),
         Some(Command::Render(args)) => match &args.scene {
             Some(path) => {
-                // --env-model is the scene path render.environment_model.
+                // --env-model, --no-shadows and --no-ray-tracing are `[render]` scene paths.
                 let mut sets = args.material.set.clone();
-                if let Some(model) = args.env_model {
-                    sets.push(format!("render.environment_model={}", model.name()));
-                }
+                sets.extend(args.render_overrides());
                 scene_cmd::render_scene_file(path, &sets, &args.output)
             }
             None if scene_cmd::wants_default_scene(&args) => scene_cmd::render_default(&args),
@@ -177,9 +175,10 @@ fn scene_from_flags(args: &RenderArgs) -> Result<Scene> {
         }],
         lights,
         environment: environment_from_flags(&args.environment),
-        render: RenderSpec {
-            environment_model: args.env_model.unwrap_or_default(),
-            ..RenderSpec::default()
+        render: {
+            let mut spec = RenderSpec::default();
+            args.apply_render_overrides(&mut spec);
+            spec
         },
         output: OutputSpec {
             width: args.size.0,

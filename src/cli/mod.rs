@@ -32,10 +32,13 @@ pub(crate) fn open_gpu() -> crate::Result<CliGpu> {
     Ok(CliGpu(gpu))
 }
 
-/// The library returns warnings; the CLI prints each as `warning: …` on stderr.
+/// The library returns warnings; the CLI prints each as `warning: …` on stderr (except a lack
+/// of ray queries, which [`open_gpu`] said once already).
 pub(crate) fn print_warnings(warnings: impl IntoIterator<Item = crate::Warning>) {
     for warning in warnings {
-        eprintln!("warning: {warning}");
+        if !matches!(warning, crate::Warning::NoRayQueries { .. }) {
+            eprintln!("warning: {warning}");
+        }
     }
 }
 

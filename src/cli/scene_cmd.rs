@@ -17,7 +17,8 @@ use crate::{Error, Result};
 
 /// Whether `shikki render` was given no scene and nothing that describes one (mesh, preset,
 /// material file, camera, lights, environment, background): then it renders [`default_scene`]. Output flags
-/// (-o, --size, --samples, --exposure, --tonemap) and --env-model still apply.
+/// (-o, --size, --samples, --exposure, --tonemap) and the `[render]` flags (--env-model,
+/// --no-shadows, --no-ray-tracing) still apply.
 pub fn wants_default_scene(args: &RenderArgs) -> bool {
     let d = RenderArgs::default();
     args.scene.is_none()
@@ -43,9 +44,7 @@ pub fn render_default(args: &RenderArgs) -> Result<()> {
     scene.output.samples = args.samples;
     scene.output.exposure_ev = args.exposure;
     scene.output.tone_curve = args.tonemap;
-    if let Some(model) = args.env_model {
-        scene.render.environment_model = model;
-    }
+    args.apply_render_overrides(&mut scene.render);
     render_built_scene(Ok(scene), &args.output, scene_summary)
 }
 

@@ -49,7 +49,7 @@ const OBJECT_KEYS: &[&str] = &[
 ];
 pub(super) const LIGHT_KEYS: &[&str] = &["kind", "to_light", "irradiance", "position", "intensity"];
 pub(super) const ENVIRONMENT_KEYS: &[&str] = &["source", "intensity", "rotation_deg"];
-pub(super) const RENDER_KEYS: &[&str] = &["environment_model"];
+pub(super) const RENDER_KEYS: &[&str] = &["environment_model", "shadows", "ray_tracing"];
 pub(super) const OUTPUT_KEYS: &[&str] = &[
     "size",
     "width",
@@ -213,6 +213,16 @@ pub(super) fn string<'a>(node: &'a Node, key: &str) -> Result<&'a str> {
         _ => Err(node
             .at
             .error(format!("`{key}` must be a string, found {}", show(node)))),
+    }
+}
+
+pub(super) fn boolean(node: &Node, key: &str) -> Result<bool> {
+    match node.value {
+        Value::Bool(b) => Ok(b),
+        _ => Err(node.at.error(format!(
+            "`{key}` must be true or false, found {}",
+            show(node)
+        ))),
     }
 }
 

@@ -62,6 +62,8 @@ pub struct SceneRenderer {
     /// Uploaded meshes, oldest first.
     gpu_meshes: Vec<(Arc<Mesh>, GpuMesh)>,
     warnings: Vec<Warning>,
+    /// [`Warning::NoRayQueries`] was given.
+    said_no_ray_queries: bool,
     validation_fails_render: bool,
 }
 
@@ -86,6 +88,7 @@ impl SceneRenderer {
             placed: Vec::new(),
             gpu_meshes: Vec::new(),
             warnings: Vec::new(),
+            said_no_ray_queries: false,
             validation_fails_render: true,
         }
     }
@@ -159,6 +162,15 @@ impl SceneRenderer {
                     .map(|(_, g)| g)
             })
             .collect();
+        let wants_rays = scene.render.shadows && scene.render.ray_tracing;
+        if let (true, false, Some(message)) = (
+            wants_rays,
+            self.said_no_ray_queries,
+            gpu.info().ray_query.warning(&gpu.info().name),
+        ) {
+            self.warnings.push(Warning::NoRayQueries { message });
+            self.said_no_ray_queries = true;
+        }
         let environment = env_index.map(|k| &self.environments[k].prefiltered);
         let (image, timings) = self.draw.render_meshes(
             gpu,

@@ -5,8 +5,8 @@ use glam::DVec3;
 
 use super::doc::{self, Node, Value};
 use super::parse::{
-    format_of, located, number, show, string, table, vec3, whole, ENVIRONMENT_KEYS, LIGHT_KEYS,
-    OUTPUT_KEYS, RENDER_KEYS,
+    boolean, format_of, located, number, show, string, table, vec3, whole, ENVIRONMENT_KEYS,
+    LIGHT_KEYS, OUTPUT_KEYS, RENDER_KEYS,
 };
 use super::{EnvironmentLight, EnvironmentSource, EnvironmentSpec, OutputSpec, RenderSpec};
 use crate::environment::load::BUILTIN_STUDIO;
@@ -133,14 +133,19 @@ fn size_text(node: &Node, s: &str) -> Result<(u32, u32)> {
 pub(super) fn render(node: &Node) -> Result<RenderSpec> {
     let mut spec = RenderSpec::default();
     for e in table(node, "[render]", RENDER_KEYS)? {
-        // RENDER_KEYS has one key so far: `environment_model`.
-        let text = string(&e.node, "environment_model")?;
-        spec.environment_model = EnvironmentModel::from_name(text).ok_or_else(|| {
-            e.node.at.error(format!(
-                "`environment_model` must be {}, found {text:?}",
-                EnvironmentModel::choices()
-            ))
-        })?;
+        match e.key.as_str() {
+            "shadows" => spec.shadows = boolean(&e.node, "shadows")?,
+            "ray_tracing" => spec.ray_tracing = boolean(&e.node, "ray_tracing")?,
+            _ => {
+                let text = string(&e.node, "environment_model")?;
+                spec.environment_model = EnvironmentModel::from_name(text).ok_or_else(|| {
+                    e.node.at.error(format!(
+                        "`environment_model` must be {}, found {text:?}",
+                        EnvironmentModel::choices()
+                    ))
+                })?;
+            }
+        }
     }
     Ok(spec)
 }
