@@ -34,12 +34,10 @@ vec3 environment_light(LacquerParams p, vec3 view_blur, vec3 n, vec3 v, vec2 nv2
     return specular + f_diff * irradiance;
 }
 
-// `position` and `interpolated_normal` as the rasteriser interpolated them at a pixel centre;
-// `surface`: where its shadow rays start (visibility.glsl; unused without RAY_TRACING).
-vec3 lacquer_radiance(LacquerParams p, vec3 view_blur, vec3 position, vec3 interpolated_normal,
+// Radiance leaving `position` (unit normal n) towards v; `surface`: where its shadow rays start
+// (visibility.glsl; unused without RAY_TRACING).
+vec3 lacquer_radiance_towards(LacquerParams p, vec3 view_blur, vec3 position, vec3 n, vec3 v,
     RaySurface surface) {
-    vec3 n = normalize(interpolated_normal);
-    vec3 v = normalize(frame.eye.xyz - position);
     // Light-independent parts of f_r, once per point (see lacquer_brdf_view).
     vec2 nv2 = dot_compensated(n, v);
     vec3 f_diff = view_dependent_diffuse(p, nv2);
@@ -72,6 +70,15 @@ vec3 lacquer_radiance(LacquerParams p, vec3 view_blur, vec3 position, vec3 inter
         radiance += environment_light(p, view_blur, n, v, nv2, f_diff);
     }
     return radiance;
+}
+
+// Radiance towards the camera, `position` and `interpolated_normal` as the rasteriser
+// interpolated them at a pixel centre.
+vec3 lacquer_radiance(LacquerParams p, vec3 view_blur, vec3 position, vec3 interpolated_normal,
+    RaySurface surface) {
+    vec3 n = normalize(interpolated_normal);
+    vec3 v = normalize(frame.eye.xyz - position);
+    return lacquer_radiance_towards(p, view_blur, position, n, v, surface);
 }
 
 #endif

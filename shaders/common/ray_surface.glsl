@@ -28,6 +28,31 @@ layout(set = 0, binding = OBJECT_GEOMETRY_BINDING, std430) readonly buffer Objec
     uvec4 object_geometry[];
 };
 
+// Triangle `triangle` of `object`'s mesh: its vertices' positions and (stored) normals.
+void fetch_triangle(int object, int triangle, out vec3 p[3], out vec3 normal[3]) {
+    uvec4 addresses = object_geometry[object];
+    MeshVertices vertices = MeshVertices(addresses.xy);
+    MeshIndices indices = MeshIndices(addresses.zw);
+    for (int k = 0; k < 3; ++k) {
+        uint first = 6u * indices.values[3 * triangle + k];
+        p[k] = vec3(vertices.values[first], vertices.values[first + 1u],
+            vertices.values[first + 2u]);
+        normal[k] = vec3(vertices.values[first + 3u], vertices.values[first + 4u],
+            vertices.values[first + 5u]);
+    }
+}
+
+// The point of triangle `triangle` of `object` at barycentrics (u, v) of vertices 1 and 2 (a
+// ray query's), and its unit shading normal: what the rasteriser would have interpolated there.
+void surface_at(int object, int triangle, vec2 uv, out vec3 position, out vec3 normal) {
+    vec3 p[3];
+    vec3 n[3];
+    fetch_triangle(object, triangle, p, n);
+    float w = 1.0 - uv.x - uv.y;
+    position = w * p[0] + uv.x * p[1] + uv.y * p[2];
+    normal = normalize(w * n[0] + uv.x * n[1] + uv.y * n[2]);
+}
+
 // The surface of triangle `triangle` of `object` at the G-buffer point `position` with unit
 // shading normal `n`.
 //
@@ -39,17 +64,11 @@ layout(set = 0, binding = OBJECT_GEOMETRY_BINDING, std430) readonly buffer Objec
 //    terminator"): the point is lifted onto the smooth surface as in Hanika, "Hacking the Shadow
 //    Terminator" (Ray Tracing Gems II, ch. 4): p' = p − Σ b_i·min(0, (p − p_i)·n_i)·n_i.
 RaySurface ray_surface(int object, int triangle, vec3 position, vec3 n) {
-    uvec4 addresses = object_geometry[object];
-    MeshVertices vertices = MeshVertices(addresses.xy);
-    MeshIndices indices = MeshIndices(addresses.zw);
     vec3 p[3];
     vec3 normal[3];
+    fetch_triangle(object, triangle, p, normal);
     for (int k = 0; k < 3; ++k) {
-        uint first = 6u * indices.values[3 * triangle + k];
-        p[k] = vec3(vertices.values[first], vertices.values[first + 1u],
-            vertices.values[first + 2u]);
-        normal[k] = normalize(vec3(vertices.values[first + 3u], vertices.values[first + 4u],
-            vertices.values[first + 5u]));
+        normal[k] = normalize(normal[k]);
     }
     vec3 e1 = p[1] - p[0];
     vec3 e2 = p[2] - p[0];

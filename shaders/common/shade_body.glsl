@@ -22,19 +22,34 @@
 layout(set = 0, binding = OBJECT_MATERIAL_BINDING) uniform textureBuffer object_material;
 
 #include "gbuffer_samples.glsl"
+#include "sequence.glsl"
+
+#ifdef RAY_TRACING
+#include "light_between.glsl"
+#endif
 
 layout(location = 0) out vec4 out_radiance; // linear radiance, alpha = coverage
 
-// `normal`: the G-buffer's (w: the triangle, with RAY_TRACING).
-vec3 shade_object(int object, vec3 position, vec4 normal) {
+// `normal`: the G-buffer's (w: the triangle, with RAY_TRACING); `key`: the pixel's
+// (sequence.glsl).
+vec3 shade_object(int object, vec3 position, vec4 normal, uint key) {
     ObjectMaterial m = FETCH_OBJECT_MATERIAL(object_material, object);
     vec3 view_blur = vec3(m.beta_normal, m.beta_grazing, m.beta_power);
+    LacquerParams p = lacquer_params(m);
 #ifdef RAY_TRACING
-    RaySurface surface = ray_surface(object, int(normal.w), position, normalize(normal.xyz));
+    vec3 n = normalize(normal.xyz);
+    RaySurface surface = ray_surface(object, int(normal.w), position, n);
+    vec3 radiance = lacquer_radiance(p, view_blur, position, normal.xyz, surface);
+    if (frame.light_transport.y > 0) {
+        vec3 v = normalize(frame.eye.xyz - position);
+        // The integral's estimate can exceed what the environment gave (few rays, most of them
+        // hiding a bright sky); the radiance it estimates cannot be negative.
+        radiance = max(radiance + light_between(p, n, v, surface, key), vec3(0.0));
+    }
+    return radiance;
 #else
-    RaySurface surface = RaySurface(position, normal.xyz);
+    return lacquer_radiance(p, view_blur, position, normal.xyz, RaySurface(position, normal.xyz));
 #endif
-    return lacquer_radiance(lacquer_params(m), view_blur, position, normal.xyz, surface);
 }
 
 void main() {
@@ -50,6 +65,9 @@ void main() {
         }
     }
     vec4 sum = vec4(0.0);
+    // The pixel in whole-image coordinates keys its sample sequence.
+    uint key = pixel_key(uvec2(texel.x, texel.y + int(frame.strip_offset.y)),
+        uint(frame.light_transport.z));
     int uncovered = SAMPLE_COUNT - bitCount(covered);
     if (uncovered > 0) {
         // The pixel centre in whole-image coordinates, as in background.frag.
@@ -81,7 +99,7 @@ void main() {
         }
         // `first` always: a NaN (never written by gbuffer.frag) must not stall the loop.
         same = (same & todo) | (todo != 0u ? 1u << first : 0u);
-        vec3 radiance = shade_object(max(int(p.w) - 1, 0), p.xyz, n);
+        vec3 radiance = shade_object(max(int(p.w) - 1, 0), p.xyz, n, key);
         sum += vec4(radiance, 1.0) * float(bitCount(same));
         todo &= ~same;
     } while (todo != 0u);

@@ -13,6 +13,10 @@
 #ifdef RAY_TRACING
 layout(set = 0, binding = SCENE_TLAS_BINDING) uniform accelerationStructureEXT scene_tlas;
 
+// Shadow rays to the lights (else every light is seen; the pass may still trace for §6's
+// integral).
+layout(constant_id = SHADOWS_ID) const bool SHADOWS = true;
+
 // Far enough for a directional light ("to infinity") and finite for every implementation.
 const float RAY_FAR = 1e30;
 
@@ -34,6 +38,33 @@ vec3 offset_ray_origin(vec3 p, vec3 n) {
         abs(p.z) < 1.0 / 32.0 ? near_origin.z : moved.z);
 }
 
+// The nearest surface along origin + t·direction, t ≥ 0.
+struct RayHit {
+    bool hit;
+    int object;
+    int triangle;
+    // Of vertices 1 and 2 (vertex 0 has 1 − u − v).
+    vec2 barycentrics;
+};
+
+RayHit trace_nearest(vec3 origin, vec3 direction) {
+    rayQueryEXT query;
+    rayQueryInitializeEXT(query, scene_tlas, gl_RayFlagsOpaqueEXT, 0xff, origin, 0.0, direction,
+        RAY_FAR);
+    while (rayQueryProceedEXT(query)) {
+    }
+    RayHit hit;
+    hit.hit = rayQueryGetIntersectionTypeEXT(query, true)
+        == gl_RayQueryCommittedIntersectionTriangleEXT;
+    // Without a hit the committed values are undefined, and llvmpipe runs a branch's loads for
+    // lanes that do not take it (quirk `loop_body_runs_when_no_lane_enters`): triangle 0 of
+    // object 0 keeps every address the hit's shading reads valid.
+    hit.object = hit.hit ? rayQueryGetIntersectionInstanceCustomIndexEXT(query, true) : 0;
+    hit.triangle = hit.hit ? rayQueryGetIntersectionPrimitiveIndexEXT(query, true) : 0;
+    hit.barycentrics = hit.hit ? rayQueryGetIntersectionBarycentricsEXT(query, true) : vec2(0.0);
+    return hit;
+}
+
 // Nothing is hit along origin + t·direction for t in [0, t_max].
 bool unoccluded(vec3 origin, vec3 direction, float t_max) {
     rayQueryEXT query;
@@ -52,6 +83,9 @@ bool unoccluded(vec3 origin, vec3 direction, float t_max) {
 // light is on.
 float light_visibility(RaySurface surface, vec4 light_vector) {
 #ifdef RAY_TRACING
+    if (!SHADOWS) {
+        return 1.0;
+    }
     vec3 towards = light_vector.w == 0.0 ? light_vector.xyz : light_vector.xyz - surface.point;
     vec3 side = dot(towards, surface.geometric_normal) < 0.0 ? -surface.geometric_normal
                                                               : surface.geometric_normal;

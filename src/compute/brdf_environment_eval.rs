@@ -51,6 +51,7 @@ pub fn brdf_environment_specular_gpu(
         fresnel_pow2_grid: 0,
         env_model: ENV_MODEL_BRDF,
         env_samples: BRDF_SAMPLES,
+        shadows: 0,
     };
     let pipeline: ComputePipeline = gpu.create_specialized_compute_pipeline(
         "brdf_environment_eval.comp",

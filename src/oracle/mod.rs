@@ -4,6 +4,8 @@
 //! lights of `raster/`. It owns no model maths of its own and must never call the GPU.
 
 pub mod bvh;
+pub mod light_between;
+pub mod path_tracer;
 pub mod raycast;
 pub mod shadows;
 

@@ -144,6 +144,10 @@ impl<'a> TracedScene<'a> {
         &self.bvh
     }
 
+    pub fn objects(&self) -> &[TracedObject<'a>] {
+        self.objects
+    }
+
     /// One ray per pixel centre (SPEC §1); alpha 1 where it meets an object. `shadows`: lights
     /// with visibility, else every light seen (the image without ray tracing).
     pub fn render(

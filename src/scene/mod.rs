@@ -24,6 +24,7 @@ pub use crate::environment::{EnvironmentLight, EnvironmentModel, EnvironmentSour
 use crate::model::LacquerMaterial;
 pub use crate::output::ToneCurve;
 pub use crate::raster::draw::Background;
+use crate::raster::draw::RayTracing;
 pub use crate::raster::{BuiltinMesh, Camera, Light, Mesh};
 use crate::Result;
 pub use doc::{Node, Origin};
@@ -120,9 +121,18 @@ pub struct RenderSpec {
     /// Lights with visibility (shadow rays), where ray tracing is on.
     pub shadows: bool,
     /// Ray queries for light between objects, where the device has them (`false`: every object
-    /// shaded as if alone, today's image on every device).
+    /// shaded as if alone, the image of a device without ray queries).
     pub ray_tracing: bool,
+    /// Depth of SPEC §6's integral, 0..=MAX_BOUNCES (0: shadows only).
+    pub bounces: u32,
+    /// Rays per shaded point for the integral, 1..=MAX_RAYS.
+    pub rays: u32,
+    /// Seeds the integral's sample sequence.
+    pub seed: u32,
 }
+
+/// Rays per shaded point unless a scene says otherwise (BENCHMARKS.md, "Light between objects").
+pub const DEFAULT_RAYS: u32 = 16;
 
 impl Default for RenderSpec {
     fn default() -> Self {
@@ -130,15 +140,25 @@ impl Default for RenderSpec {
             environment_model: EnvironmentModel::default(),
             shadows: true,
             ray_tracing: true,
+            bounces: 1,
+            rays: DEFAULT_RAYS,
+            seed: 0,
         }
     }
 }
 
 impl RenderSpec {
-    /// Whether a draw on `gpu` traces shadow rays: asked for, and the device has ray queries
-    /// (without them the image is today's, and the CLI says so once).
-    pub fn traces_shadows(&self, gpu: &crate::gpu::GpuContext) -> bool {
-        self.shadows && self.ray_tracing && gpu.info().ray_query.is_enabled()
+    /// What a draw on `gpu` traces: `None` with ray tracing off, on a device without ray queries
+    /// (then the image is that of every object alone, and the renderer warns once), or when
+    /// nothing would be traced.
+    pub fn ray_tracing_on(&self, gpu: &crate::gpu::GpuContext) -> Option<RayTracing> {
+        let rt = RayTracing {
+            shadows: self.shadows,
+            bounces: self.bounces,
+            rays: self.rays,
+            seed: self.seed,
+        };
+        (self.ray_tracing && rt.traces() && gpu.info().ray_query.is_enabled()).then_some(rt)
     }
 }
 

@@ -49,7 +49,14 @@ const OBJECT_KEYS: &[&str] = &[
 ];
 pub(super) const LIGHT_KEYS: &[&str] = &["kind", "to_light", "irradiance", "position", "intensity"];
 pub(super) const ENVIRONMENT_KEYS: &[&str] = &["source", "intensity", "rotation_deg"];
-pub(super) const RENDER_KEYS: &[&str] = &["environment_model", "shadows", "ray_tracing"];
+pub(super) const RENDER_KEYS: &[&str] = &[
+    "environment_model",
+    "shadows",
+    "ray_tracing",
+    "bounces",
+    "rays",
+    "seed",
+];
 pub(super) const OUTPUT_KEYS: &[&str] = &[
     "size",
     "width",

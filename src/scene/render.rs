@@ -162,7 +162,8 @@ impl SceneRenderer {
                     .map(|(_, g)| g)
             })
             .collect();
-        let wants_rays = scene.render.shadows && scene.render.ray_tracing;
+        let wants_rays =
+            scene.render.ray_tracing && (scene.render.shadows || scene.render.bounces > 0);
         if let (true, false, Some(message)) = (
             wants_rays,
             self.said_no_ray_queries,
@@ -180,7 +181,7 @@ impl SceneRenderer {
                 lights: &scene.lights,
                 environment,
                 environment_model: scene.render.environment_model,
-                shadows: scene.render.traces_shadows(gpu),
+                ray_tracing: scene.render.ray_tracing_on(gpu),
                 background: scene.output.background,
             },
             &gpu_meshes,

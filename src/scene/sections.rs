@@ -13,6 +13,7 @@ use crate::environment::load::BUILTIN_STUDIO;
 use crate::environment::EnvironmentModel;
 use crate::output::ToneCurve;
 use crate::raster::draw::{Background, SUPPORTED_SAMPLES};
+use crate::raster::draw::{MAX_BOUNCES, MAX_RAYS};
 use crate::raster::lights::Light;
 use crate::Result;
 
@@ -136,6 +137,9 @@ pub(super) fn render(node: &Node) -> Result<RenderSpec> {
         match e.key.as_str() {
             "shadows" => spec.shadows = boolean(&e.node, "shadows")?,
             "ray_tracing" => spec.ray_tracing = boolean(&e.node, "ray_tracing")?,
+            "bounces" => spec.bounces = whole(&e.node, "bounces", 0..=MAX_BOUNCES)?,
+            "rays" => spec.rays = whole(&e.node, "rays", 1..=MAX_RAYS)?,
+            "seed" => spec.seed = whole(&e.node, "seed", 0..=u32::MAX)?,
             _ => {
                 let text = string(&e.node, "environment_model")?;
                 spec.environment_model = EnvironmentModel::from_name(text).ok_or_else(|| {

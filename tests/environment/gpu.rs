@@ -276,7 +276,7 @@ fn render_sphere(
                 lights: &[],
                 environment: Some(&env),
                 environment_model: Default::default(),
-                shadows: false,
+                ray_tracing: None,
                 background: Background::Transparent,
             },
             &RenderSettings {
@@ -506,7 +506,7 @@ fn an_uploaded_environment_reads_back_identical_texels_and_renders_the_same() {
                     lights: &[],
                     environment: Some(environment),
                     environment_model: Default::default(),
-                    shadows: false,
+                    ray_tracing: None,
                     background: Background::Environment,
                 },
                 &RenderSettings {

@@ -141,7 +141,7 @@ fn fitted_material_renders_like_the_source_on_the_oracle_and_the_gpu() {
                 lights: &lights,
                 environment: None,
                 environment_model: Default::default(),
-                shadows: false,
+                ray_tracing: None,
                 background: Background::Transparent,
             };
             let settings = RenderSettings {

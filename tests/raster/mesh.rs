@@ -402,7 +402,7 @@ fn bowl_renders_validated_with_the_expected_coverage() {
                 lights: &lights,
                 environment: None,
                 environment_model: Default::default(),
-                shadows: false,
+                ray_tracing: None,
                 background: Background::Transparent,
             },
             &RenderSettings {

@@ -100,6 +100,9 @@ shader_interface! {
             env_model,
             /// The `brdf` model's lobe samples per shaded point (`ENV_SAMPLES`).
             env_samples,
+            /// The ray-traced shading pass traces shadow rays to the lights (`SHADOWS`, a
+            /// VkBool32; SPEC §6's vis, else 1).
+            shadows,
         }
     }
 
@@ -176,6 +179,9 @@ shader_interface! {
             draw_info: ivec4,
             /// The constant background (linear rgba; transparent is all 0).
             background_color: vec4,
+            /// SPEC §6's integral in the ray-traced shading pass: x = rays per shaded point,
+            /// y = bounces (0: none), z = the seed of the sample sequence.
+            light_transport: ivec4,
         }
 
         /// Step 1's push constants (equirect_to_cube*.comp).

@@ -38,8 +38,8 @@ mod types;
 
 pub use gpu_mesh::GpuMesh;
 pub use types::{
-    Background, DrawObject, DrawOptions, DrawScene, DrawTimings, MeshShading, RenderSettings,
-    MAX_DRAW_KNOTS, SUPPORTED_SAMPLES,
+    Background, DrawObject, DrawOptions, DrawScene, DrawTimings, MeshShading, RayTracing,
+    RenderSettings, MAX_BOUNCES, MAX_DRAW_KNOTS, MAX_RAYS, SUPPORTED_SAMPLES,
 };
 
 use crate::environment::brdf_quadrature::AlbedoCache;
@@ -294,13 +294,13 @@ fn draw_deferred(
 ) -> Result<(HdrImage, Option<DrawTimings>)> {
     let DrawInputs { gpu, scene, .. } = *inputs;
     let environment_background = scene.background == Background::Environment;
-    let gbuffer = pipelines.get(gpu, inputs.key(PipelineKind::GBuffer(scene.shadows)))?;
+    // The ray tracing of this draw, if it traces any ray.
+    let traced = scene.ray_tracing.filter(RayTracing::traces);
+    let ray_traced = traced.is_some();
+    let gbuffer = pipelines.get(gpu, inputs.key(PipelineKind::GBuffer(ray_traced)))?;
     let coverage = pipelines.get(
         gpu,
-        inputs.key(PipelineKind::Coverage(
-            environment_background,
-            scene.shadows,
-        )),
+        inputs.key(PipelineKind::Coverage(environment_background, ray_traced)),
     )?;
     let shade = pipelines.get(
         gpu,
@@ -308,17 +308,21 @@ fn draw_deferred(
             environment_background,
             fresnel_pow2_grid,
             environment_model: scene.environment_model,
-            ray_traced: scene.shadows,
+            ray_traced,
+            shadows: traced.is_some_and(|rt| rt.shadows),
         })),
     )?;
     // The draw's top-level structure over the objects' meshes (each mesh's bottom level is
     // built once and kept with it).
-    let traced = match scene.shadows {
-        true => Some((
-            top_level(gpu, inputs.meshes)?,
-            object_geometry(gpu, inputs.meshes)?,
-        )),
-        false => None,
+    let structures = match traced {
+        Some(rt) => {
+            frame.light_transport = [rt.rays as i32, rt.bounces as i32, rt.seed as i32, 0];
+            Some((
+                top_level(gpu, inputs.meshes)?,
+                object_geometry(gpu, inputs.meshes)?,
+            ))
+        }
+        None => None,
     };
     // The `paper` model never reads the layer texels: any texel buffer fills the binding.
     let layer_texels = match scene.environment_model {
@@ -336,7 +340,9 @@ fn draw_deferred(
         (inputs.environment, layer_texels),
         inputs.sampler,
         gbuffer_images,
-        traced.as_ref().map(|(scene, geometry)| (scene, geometry)),
+        structures
+            .as_ref()
+            .map(|(scene, geometry)| (scene, geometry)),
     )?;
     let passes = DeferredPasses {
         gbuffer: &gbuffer,
@@ -348,7 +354,7 @@ fn draw_deferred(
         // The environment background is drawn by the coverage pass.
         coverage_everywhere: environment_background,
         clear_color: scene.background.clear_color(),
-        ray_traced: scene.shadows,
+        ray_traced,
     };
     let settings = inputs.settings;
     let mut timings = inputs.stamps.map(|_| DrawTimings::default());
@@ -425,11 +431,17 @@ fn top_level(gpu: &GpuContext, meshes: &[&GpuMesh]) -> Result<AccelerationStruct
 }
 
 /// Per object, its mesh's vertex and index buffer addresses (low, high words), as
-/// ray_surface.glsl reads them at `OBJECT_GEOMETRY_BINDING`.
+/// ray_surface.glsl reads them at `OBJECT_GEOMETRY_BINDING`. A mesh without triangles (never hit,
+/// never shaded) gets another mesh's: llvmpipe runs the loads of a branch no lane takes, and
+/// they must stay in bounds (visibility.glsl's `trace_nearest`).
 fn object_geometry(gpu: &GpuContext, meshes: &[&GpuMesh]) -> Result<Buffer> {
+    let stand_in = meshes.iter().find(|m| m.triangle_count() > 0).copied();
     let rows = meshes
         .iter()
-        .map(|mesh| mesh.addresses())
+        .map(|&mesh| match (mesh.triangle_count(), stand_in) {
+            (0, Some(other)) => other.addresses(),
+            _ => mesh.addresses(),
+        })
         .collect::<Result<Vec<[u32; 4]>>>()?;
     gpu_mesh::upload(gpu, "object geometry", &rows, BufferUsage::STORAGE)
 }

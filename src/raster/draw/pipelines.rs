@@ -75,8 +75,10 @@ pub(super) struct ShadeVariant {
     pub fresnel_pow2_grid: bool,
     /// SPEC §4's environment model.
     pub environment_model: EnvironmentModel,
-    /// Lights with ray-query visibility (SPEC §6): shade_rt*.frag and their bindings.
+    /// Rays are traced (SPEC §6): shade_rt*.frag and their bindings.
     pub ray_traced: bool,
+    /// ... and shadow rays among them (`SHADOWS`).
+    pub shadows: bool,
 }
 
 /// Whether a table's knots (as the shader reads them, f32) lie at exactly i·step degrees from 0
@@ -147,6 +149,7 @@ impl PipelineKey {
                 EnvironmentModel::Brdf => ENV_MODEL_BRDF,
             },
             env_samples: BRDF_SAMPLES,
+            shadows: u32::from(variant.shadows),
         }
     }
 

@@ -212,7 +212,7 @@ mod tests {
             lights: &lights,
             environment: None,
             environment_model: Default::default(),
-            shadows: false,
+            ray_tracing: None,
             background: Background::Color([0.1, 0.2, 0.3]),
         };
         let settings = RenderSettings {

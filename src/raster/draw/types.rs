@@ -77,10 +77,35 @@ pub struct DrawScene<'a> {
     pub environment: Option<&'a GpuEnvironment>,
     /// How the environment lights them (SPEC §4).
     pub environment_model: EnvironmentModel,
-    /// Lights with visibility (SPEC §6): shadow rays by ray queries. Needs a device with ray
-    /// queries ([`RayQuery`](crate::gpu::RayQuery)); refused without.
-    pub shadows: bool,
+    /// Light between objects (SPEC §6) by ray queries; `None`: every object shaded as if alone.
+    /// Needs a device with ray queries ([`RayQuery`](crate::gpu::RayQuery)); refused without.
+    pub ray_tracing: Option<RayTracing>,
     pub background: Background,
+}
+
+/// Most bounces of SPEC §6's integral.
+pub const MAX_BOUNCES: u32 = 4;
+/// Most rays per shaded point.
+pub const MAX_RAYS: u32 = 4096;
+
+/// SPEC §6 as one draw traces it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RayTracing {
+    /// Lights with visibility (shadow rays), at the shaded points and at every bounce.
+    pub shadows: bool,
+    /// Depth of the integral's recursion (0: lights with visibility only).
+    pub bounces: u32,
+    /// Rays per shaded point (1..=MAX_RAYS).
+    pub rays: u32,
+    /// Seeds the sample sequence: the same seed gives the same image.
+    pub seed: u32,
+}
+
+impl RayTracing {
+    /// Whether the shading pass traces any ray.
+    pub fn traces(&self) -> bool {
+        self.shadows || self.bounces > 0
+    }
 }
 
 /// The fragment shader of the mesh pass.
@@ -164,16 +189,8 @@ pub(crate) fn validate(
             ));
         }
     }
-    if scene.shadows && !gpu.info().ray_query.is_enabled() {
-        return Err(Error::invalid(
-            "shadows",
-            true,
-            format!(
-                "shadows need ray queries; {} has: {}. Draw without shadows",
-                gpu.info().name,
-                gpu.info().ray_query.summary()
-            ),
-        ));
+    if let Some(rt) = scene.ray_tracing {
+        validate_ray_tracing(gpu, scene, &rt)?;
     }
     scene.camera.validate()?;
     for light in scene.lights {
@@ -196,6 +213,48 @@ pub(crate) fn validate(
     }
     for object in scene.objects {
         object.mesh.validate()?;
+    }
+    Ok(())
+}
+
+/// A ray-traced draw: a device with ray queries, bounces and rays in range, and triangle indices
+/// the G-buffer holds exactly (as f32, below 2^24).
+fn validate_ray_tracing(gpu: &GpuContext, scene: &DrawScene<'_>, rt: &RayTracing) -> Result<()> {
+    if !gpu.info().ray_query.is_enabled() {
+        return Err(Error::invalid(
+            "ray_tracing",
+            true,
+            format!(
+                "light between objects needs ray queries; {} has: {}. Draw with ray tracing off",
+                gpu.info().name,
+                gpu.info().ray_query.summary()
+            ),
+        ));
+    }
+    if rt.bounces > MAX_BOUNCES {
+        return Err(Error::invalid(
+            "bounces",
+            rt.bounces,
+            format!("bounces must be 0..={MAX_BOUNCES}"),
+        ));
+    }
+    if !(1..=MAX_RAYS).contains(&rt.rays) {
+        return Err(Error::invalid(
+            "rays",
+            rt.rays,
+            format!("rays must be 1..={MAX_RAYS}"),
+        ));
+    }
+    for object in scene.objects {
+        let triangles = object.mesh.triangle_count();
+        if triangles >= 1 << 24 {
+            return Err(Error::invalid(
+                "mesh",
+                triangles,
+                "a ray-traced mesh has at most 16,777,215 triangles (2^24 - 1); split it or \
+                 render with ray tracing off",
+            ));
+        }
     }
     Ok(())
 }

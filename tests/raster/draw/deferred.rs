@@ -100,7 +100,7 @@ fn render_both(
         lights: &lights,
         environment,
         environment_model: Default::default(),
-        shadows: false,
+        ray_tracing: None,
         background,
     };
     let mut renderer = LacquerRenderer::new();
@@ -264,7 +264,7 @@ fn fresnel_lookup_without_search_matches_the_general_one() {
             lights: &lights,
             environment: Some(&env),
             environment_model: Default::default(),
-            shadows: false,
+            ray_tracing: None,
             background: Background::Transparent,
         };
         renderer.render(&gpu, &scene, &settings).unwrap()

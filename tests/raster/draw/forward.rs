@@ -124,7 +124,7 @@ fn render_both(
                 lights: &lights,
                 environment: None,
                 environment_model: Default::default(),
-                shadows: false,
+                ray_tracing: None,
                 background: Background::Transparent,
             },
             &RenderSettings {

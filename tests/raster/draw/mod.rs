@@ -1,3 +1,4 @@
 mod deferred;
 mod forward;
+mod light_between;
 mod shadows;

@@ -15,13 +15,15 @@ use shikki::model::{BrdfParams, FresnelTable, LacquerMaterial};
 use shikki::oracle::shadows::{TracedObject, TracedScene};
 use shikki::output::HdrImage;
 use shikki::raster::camera::Camera;
-use shikki::raster::draw::{Background, DrawObject, DrawScene, LacquerRenderer, RenderSettings};
+use shikki::raster::draw::{
+    Background, DrawObject, DrawScene, LacquerRenderer, RayTracing, RenderSettings,
+};
 use shikki::raster::lights::Light;
 use shikki::raster::mesh::{self, BuiltinMesh, Mesh};
 use shikki::raster::mesh_io::transform_mesh;
 
 /// Radiance below this is compared absolutely (as in forward.rs: a third of one 8-bit code).
-const RADIANCE_FLOOR: f64 = 1e-4;
+pub(super) const RADIANCE_FLOOR: f64 = 1e-4;
 
 /// GPU (f32 shading) against the twin (f64 BRDF, f32 geometry) where both see the same lights:
 /// forward.rs measures the shading alone at p99 ≤ 2e-4 on these presets; 1e-3 (the bound
@@ -33,7 +35,7 @@ const P99_BOUND: f64 = 1e-3;
 /// disagree on a light (each such pixel differs by that light's whole contribution).
 const EDGE_DISAGREEMENT: f64 = 0.003;
 
-fn gpu_or_skip() -> Option<GpuContext> {
+pub(super) fn gpu_or_skip() -> Option<GpuContext> {
     let gpu = validated_gpu();
     if !gpu.info().ray_query.is_enabled() {
         eprintln!(
@@ -46,12 +48,12 @@ fn gpu_or_skip() -> Option<GpuContext> {
     Some(gpu)
 }
 
-struct Material {
-    brdf: BrdfParams,
-    fresnel: FresnelTable,
+pub(super) struct Material {
+    pub brdf: BrdfParams,
+    pub fresnel: FresnelTable,
 }
 
-fn material(preset: &str) -> Material {
+pub(super) fn material(preset: &str) -> Material {
     let m = LacquerMaterial::preset(preset).unwrap();
     Material {
         brdf: m.brdf_params().unwrap(),
@@ -60,7 +62,7 @@ fn material(preset: &str) -> Material {
 }
 
 /// A sphere of radius 0.5 resting on the board (scaled to 3 × 3) at the origin.
-fn sphere_on_board() -> Vec<Mesh> {
+pub(super) fn sphere_on_board() -> Vec<Mesh> {
     let sphere = transform_mesh(
         &mesh::sphere(128, 64),
         DMat4::from_translation(DVec3::new(0.0, 0.5, 0.0)) * DMat4::from_scale(DVec3::splat(0.5)),
@@ -70,7 +72,7 @@ fn sphere_on_board() -> Vec<Mesh> {
 }
 
 /// A bowl with a smaller bowl inside it: concave self-shadowing and shadows between the two.
-fn bowl_in_bowl() -> Vec<Mesh> {
+pub(super) fn bowl_in_bowl() -> Vec<Mesh> {
     let outer = BuiltinMesh::Bowl.mesh_with_segments(96).unwrap();
     let inner = transform_mesh(
         &outer,
@@ -80,7 +82,7 @@ fn bowl_in_bowl() -> Vec<Mesh> {
     vec![outer, inner]
 }
 
-fn lights() -> Vec<Light> {
+pub(super) fn lights() -> Vec<Light> {
     vec![
         Light::Directional {
             to_light: DVec3::new(0.6, 0.7, 0.4).normalize(),
@@ -93,7 +95,7 @@ fn lights() -> Vec<Light> {
     ]
 }
 
-fn camera_looking_down() -> Camera {
+pub(super) fn camera_looking_down() -> Camera {
     Camera {
         eye: DVec3::new(0.4, 2.6, 3.2),
         target: DVec3::new(0.0, 0.3, 0.0),
@@ -129,7 +131,13 @@ fn gpu_render(
                 lights,
                 environment: None,
                 environment_model: Default::default(),
-                shadows,
+                // Shadows alone: SPEC §6's integral is tested in light_between.rs.
+                ray_tracing: shadows.then_some(RayTracing {
+                    shadows: true,
+                    bounces: 0,
+                    rays: 1,
+                    seed: 0,
+                }),
                 background: Background::Transparent,
             },
             &RenderSettings {
@@ -163,7 +171,7 @@ fn twin_render(
 }
 
 /// Per pixel covered by both: max over channels of |a − b| / max(b, RADIANCE_FLOOR).
-fn relative_errors(a: &HdrImage, b: &HdrImage) -> Vec<f64> {
+pub(super) fn relative_errors(a: &HdrImage, b: &HdrImage) -> Vec<f64> {
     a.pixels
         .iter()
         .zip(&b.pixels)

@@ -1,0 +1,134 @@
+// SPEC §6's integral in the ray-traced shading pass: ∫ f_r·[L_hit − L(s)]·hit·(N·s) dω, what
+// the objects change about the light a point receives (the light they send minus the
+// environment they hide), estimated with frame.light_transport.x rays per shaded point and
+// frame.light_transport.y bounces. Each ray samples the BRDF's two lobes (cosine-weighted
+// diffuse, Beckmann half vectors for the specular lobe) and weighs by the mixture's pdf
+// (one-sample multiple importance sampling, balance heuristic). A ray that meets nothing adds
+// nothing, so the term adds no noise where no object is in sight.
+//
+// The includer includes frame.glsl, lacquer_brdf.glsl, lacquer_shade.glsl and declares
+// `object_material`. The CPU twin is `oracle::light_between`: keep the two alike.
+
+#ifndef LIGHT_BETWEEN_GLSL
+#define LIGHT_BETWEEN_GLSL
+
+#include "sequence.glsl"
+
+// An orthonormal basis (t, b, n) (Duff et al., "Building an Orthonormal Basis, Revisited").
+void tangent_frame(vec3 n, out vec3 t, out vec3 b) {
+    float sign_z = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (sign_z + n.z);
+    float c = n.x * n.y * a;
+    t = vec3(1.0 + sign_z * n.x * n.x * a, sign_z * c, -sign_z * n.x);
+    b = vec3(c, sign_z + n.y * n.y * a, -n.y);
+}
+
+// The probability of sampling the specular lobe: its share of the reflected light under a
+// uniform sky (Fresnel at nv against the diffuse albedo), kept in [0.1, 0.9] so neither lobe is
+// starved.
+float specular_lobe_probability(LacquerParams p, float nv, vec3 f_diff) {
+    vec3 f = fresnel_table(angle_deg_of_cos(nv), p.fresnel_first, p.fresnel_count);
+    float specular = f.r + f.g + f.b;
+    float diffuse = (f_diff.r + f_diff.g + f_diff.b) * PI;
+    return clamp(specular / max(specular + diffuse, 1e-30), 0.1, 0.9);
+}
+
+// One sample of the lobes at (n, v) from the numbers u: the direction s and the weight
+// f_r·(N·s)/pdf(s), pdf the mixture of both lobes' densities. False when the sample is lost
+// (below the surface, or a density of 0); it still counts in the mean.
+bool sample_lobes(LacquerParams p, vec3 n, vec3 v, vec2 nv2, vec3 f_diff, vec3 u, out vec3 s,
+    out vec3 weight) {
+    float nv = nv2.x + nv2.y;
+    weight = vec3(0.0);
+    s = n;
+    if (nv <= 0.0) {
+        return false;
+    }
+    float p_specular = specular_lobe_probability(p, nv, f_diff);
+    vec3 t, b;
+    tangent_frame(n, t, b);
+    float phi = 2.0 * PI * u.z;
+    vec3 around = t * cos(phi) + b * sin(phi);
+    float m2 = p.beckmann_m * p.beckmann_m;
+    if (u.x < p_specular) {
+        // tan²θ_h = −m²·ln(1 − u): the Beckmann distribution of D·(N·H).
+        float tan2 = -m2 * log(1.0 - u.y);
+        float cos_h = inversesqrt(1.0 + tan2);
+        float sin_h = sqrt(max(1.0 - cos_h * cos_h, 0.0));
+        vec3 h = around * sin_h + n * cos_h;
+        s = 2.0 * dot(v, h) * h - v;
+    } else {
+        s = around * sqrt(u.y) + n * sqrt(max(1.0 - u.y, 0.0));
+    }
+    float ns = dot(n, s);
+    if (ns <= 0.0) {
+        return false;
+    }
+    vec3 h = normalize(v + s);
+    float nh = dot(n, h);
+    float vh = dot(v, h);
+    float pdf_specular = nh > 0.0 && vh > 0.0
+        ? beckmann_d(n, h, nh, p.beckmann_m) * nh / (4.0 * vh)
+        : 0.0;
+    float pdf = p_specular * pdf_specular + (1.0 - p_specular) * ns / PI;
+    if (!(pdf > 0.0)) {
+        return false;
+    }
+    weight = lacquer_brdf_view(p, n, v, s, nv2, f_diff) * (ns / pdf);
+    return true;
+}
+
+// L(s): the environment along s (the sharp layer: after intensity and rotation), which a hit
+// hides.
+vec3 hidden_environment(vec3 s) {
+    return frame.environment.x != 0 ? sharp_radiance(s) : vec3(0.0);
+}
+
+// The integral at a shaded point: material p, unit normal n, view v, rays leaving from
+// `surface`; `key` the pixel's (sequence.glsl). Each ray is a path of up to `bounces`
+// reflections: at each surface y it meets it adds throughput·w·(L_o(y) − L(s)), L_o(y) the
+// lights with visibility plus the environment model at y, which is SPEC §6's recursion with one
+// sample per level.
+vec3 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint key) {
+    int rays = frame.light_transport.x;
+    int bounces = frame.light_transport.y;
+    vec3 total = vec3(0.0);
+    for (int i = 0; i < rays; ++i) {
+        LacquerParams p = p0;
+        vec3 n = n0;
+        vec3 v = v0;
+        RaySurface surface = surface0;
+        vec3 throughput = vec3(1.0);
+        for (int depth = 0; depth < bounces; ++depth) {
+            vec2 nv2 = dot_compensated(n, v);
+            vec3 f_diff = view_dependent_diffuse(p, nv2);
+            vec3 u = sample_numbers(key, uint(i), uint(rays), uint(depth));
+            vec3 s;
+            vec3 weight;
+            if (!sample_lobes(p, n, v, nv2, f_diff, u, s, weight)) {
+                break;
+            }
+            vec3 side = dot(s, surface.geometric_normal) < 0.0 ? -surface.geometric_normal
+                                                                 : surface.geometric_normal;
+            RayHit hit = trace_nearest(offset_ray_origin(surface.point, side), s);
+            if (!hit.hit) {
+                break;
+            }
+            vec3 position;
+            vec3 normal;
+            surface_at(hit.object, hit.triangle, hit.barycentrics, position, normal);
+            ObjectMaterial m = FETCH_OBJECT_MATERIAL(object_material, hit.object);
+            vec3 view_blur = vec3(m.beta_normal, m.beta_grazing, m.beta_power);
+            p = lacquer_params(m);
+            n = normal;
+            v = -s;
+            surface = ray_surface(hit.object, hit.triangle, position, normal);
+            vec3 radiance = lacquer_radiance_towards(p, view_blur, position, n, v, surface);
+            total += throughput * weight * (radiance - hidden_environment(s));
+            throughput *= weight;
+        }
+    }
+    return total / float(max(rays, 1));
+}
+
+#endif

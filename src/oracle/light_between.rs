@@ -1,0 +1,352 @@
+//! The CPU twin of SPEC §6's integral as the ray-traced shading pass estimates it
+//! (`shaders/common/light_between.glsl`, `sequence.glsl`): the same sample sequence bit for bit,
+//! the same lobe sampling and mixture pdf, the same paths, over the same triangles (a
+//! [`TracedScene`]). Directions are formed in f32 like the shader's; the BRDF is
+//! `model::lacquer_brdf` in f64.
+//!
+//! The environment is constant (radiance `c` from every direction), for which both environment
+//! models have exact values the twin can state without the GPU's cube filtering: `paper` gives
+//! F(acos nv)·c, `brdf` gives A(nv)·c from the albedo knots the draw uses; the diffuse half is
+//! f_diff·E_irr, E_irr the irradiance the caller passes (the GPU's irradiance cube holds π·c to
+//! its quadrature's accuracy).
+
+use glam::{DVec3, Vec3};
+
+use super::bvh::BvhHit;
+use super::shadows::{light_visible, offset_ray_origin, ray_surface, RaySurface, TracedScene};
+use crate::environment::brdf_quadrature::albedo_at;
+use crate::environment::EnvironmentModel;
+use crate::model::brdf::{beckmann_d, view_dependent_diffuse};
+use crate::model::lacquer_brdf;
+use crate::output::HdrImage;
+use crate::raster::draw::RayTracing;
+use crate::raster::{Camera, Light};
+
+/// `sequence.glsl`, bit for bit.
+pub mod sequence {
+    /// Wellons' lowbias32.
+    pub fn hash_u32(mut x: u32) -> u32 {
+        x ^= x >> 16;
+        x = x.wrapping_mul(0x7feb_352d);
+        x ^= x >> 15;
+        x = x.wrapping_mul(0x846c_a68b);
+        x ^= x >> 16;
+        x
+    }
+
+    /// [0, 1) from the top 24 bits.
+    pub fn unit_from_bits(x: u32) -> f32 {
+        (x >> 8) as f32 * (1.0 / 16_777_216.0)
+    }
+
+    pub fn radical_inverse_2(i: u32) -> f32 {
+        unit_from_bits(i.reverse_bits())
+    }
+
+    pub fn radical_inverse_3(mut i: u32) -> f32 {
+        let (mut mirrored, mut scale) = (0u32, 1u32);
+        let mut k = 0;
+        while k < 20 && i > 0 {
+            mirrored = mirrored * 3 + i % 3;
+            i /= 3;
+            scale *= 3;
+            k += 1;
+        }
+        mirrored as f32 / scale as f32
+    }
+
+    pub fn pixel_key(x: u32, y: u32, seed: u32) -> u32 {
+        hash_u32(y ^ hash_u32(x ^ hash_u32(seed)))
+    }
+
+    fn fract(x: f32) -> f32 {
+        x - x.floor()
+    }
+
+    /// Three numbers in [0, 1) for ray `ray` of `rays` at bounce `depth`.
+    pub fn sample_numbers(key: u32, ray: u32, rays: u32, depth: u32) -> [f32; 3] {
+        if depth == 0 {
+            let shift = [
+                unit_from_bits(hash_u32(key)),
+                unit_from_bits(hash_u32(key ^ 0x9e37_79b9)),
+                unit_from_bits(hash_u32(key ^ 0x7f4a_7c15)),
+            ];
+            let point = [
+                (ray as f32 + 0.5) / rays as f32,
+                radical_inverse_2(ray),
+                radical_inverse_3(ray),
+            ];
+            return std::array::from_fn(|k| fract(point[k] + shift[k]));
+        }
+        let h = hash_u32(key ^ hash_u32(ray.wrapping_mul(8).wrapping_add(depth)));
+        [
+            unit_from_bits(hash_u32(h)),
+            unit_from_bits(hash_u32(h.wrapping_add(1))),
+            unit_from_bits(hash_u32(h.wrapping_add(2))),
+        ]
+    }
+}
+
+/// A constant environment as the twin shades it.
+#[derive(Clone, Copy, Debug)]
+pub struct ConstantEnvironment {
+    /// c: the radiance from every direction (after intensity).
+    pub radiance: [f64; 3],
+    /// E_irr: what the draw's irradiance cube holds (π·c up to its quadrature).
+    pub irradiance: [f64; 3],
+    pub model: EnvironmentModel,
+}
+
+/// One object's albedo knots (the `brdf` model's A(nv)), as the draw computes them.
+pub type AlbedoKnots = Vec<[f32; 4]>;
+
+/// A surface point of the twin: object, triangle, where rays leave, shading frame.
+struct Point {
+    object: usize,
+    position: Vec3,
+    normal: Vec3,
+    view: Vec3,
+    surface: RaySurface,
+}
+
+/// The scene, lights and environment the twin traces.
+pub struct Twin<'a> {
+    pub scene: &'a TracedScene<'a>,
+    pub lights: &'a [Light],
+    pub environment: Option<ConstantEnvironment>,
+    /// Per object, for the `brdf` model.
+    pub albedo: &'a [AlbedoKnots],
+}
+
+impl Twin<'_> {
+    /// One ray per pixel centre; alpha 1 where it meets an object. `rt`: what the draw traces.
+    pub fn render(
+        &self,
+        camera: &Camera,
+        (width, height): (u32, u32),
+        rt: &RayTracing,
+    ) -> HdrImage {
+        let mut image = HdrImage::new(width, height);
+        let eye = camera.eye.as_vec3();
+        for y in 0..height {
+            for x in 0..width {
+                let dir = camera.primary_ray(f64::from(x) + 0.5, f64::from(y) + 0.5, width, height);
+                let Some(hit) = self
+                    .scene
+                    .bvh()
+                    .intersect(eye, dir.as_vec3(), 0.0, f32::INFINITY)
+                else {
+                    continue;
+                };
+                let (position, normal) = self.surface_at(&hit);
+                let view = (eye - position).normalize();
+                let point = self.point(&hit, position, normal, view);
+                let mut radiance = self.radiance_towards(&point, rt.shadows);
+                if rt.bounces > 0 {
+                    let key = sequence::pixel_key(x, y, rt.seed);
+                    // As the shader: an estimate below 0 is clamped.
+                    radiance = (radiance + self.light_between(&point, key, rt)).max(DVec3::ZERO);
+                }
+                let [r, g, b] = radiance.to_array();
+                image.set(x, y, [r as f32, g as f32, b as f32, 1.0]);
+            }
+        }
+        image
+    }
+
+    /// ray_surface.glsl's `surface_at`.
+    fn surface_at(&self, hit: &BvhHit) -> (Vec3, Vec3) {
+        let mesh = self.scene.objects()[hit.object as usize].mesh;
+        let [(p0, n0), (p1, n1), (p2, n2)] = [0, 1, 2].map(|k| {
+            let index = mesh.indices[3 * hit.triangle as usize + k] as usize;
+            (
+                Vec3::from(mesh.positions[index]),
+                Vec3::from(mesh.normals[index]),
+            )
+        });
+        let [u, v] = hit.barycentrics;
+        let w = 1.0 - u - v;
+        (
+            w * p0 + u * p1 + v * p2,
+            (w * n0 + u * n1 + v * n2).normalize(),
+        )
+    }
+
+    fn point(&self, hit: &BvhHit, position: Vec3, normal: Vec3, view: Vec3) -> Point {
+        let mesh = self.scene.objects()[hit.object as usize].mesh;
+        Point {
+            object: hit.object as usize,
+            position,
+            normal,
+            view,
+            surface: ray_surface(mesh, hit.triangle, position, normal),
+        }
+    }
+
+    /// lacquer_shade.glsl's `lacquer_radiance_towards`: lights with visibility (or without,
+    /// `shadows` false) plus the environment model.
+    fn radiance_towards(&self, point: &Point, shadows: bool) -> DVec3 {
+        let object = &self.scene.objects()[point.object];
+        let (p, n, v) = (
+            point.position.as_dvec3(),
+            point.normal.as_dvec3(),
+            point.view.as_dvec3(),
+        );
+        let nv = n.dot(v);
+        if !(nv > 0.0) {
+            return DVec3::ZERO;
+        }
+        let mut radiance = DVec3::ZERO;
+        for light in self.lights {
+            let Some((l, irradiance)) = light.incident_at(p) else {
+                continue;
+            };
+            let nl = n.dot(l);
+            if nl <= 0.0 || (shadows && !light_visible(self.scene.bvh(), &point.surface, light)) {
+                continue;
+            }
+            let f_r = DVec3::from(lacquer_brdf(object.brdf, object.fresnel, n, v, l));
+            radiance += f_r * irradiance * nl;
+        }
+        if let Some(env) = self.environment {
+            let c = DVec3::from(env.radiance);
+            let specular = match env.model {
+                EnvironmentModel::Paper => {
+                    DVec3::from(object.fresnel.eval(nv.min(1.0).acos().to_degrees())) * c
+                }
+                EnvironmentModel::Brdf => {
+                    DVec3::from(albedo_at(&self.albedo[point.object], nv)) * c
+                }
+            };
+            let f_diff = DVec3::from(view_dependent_diffuse(object.brdf, nv));
+            radiance += specular + f_diff * DVec3::from(env.irradiance);
+        }
+        radiance
+    }
+
+    /// light_between.glsl's `light_between`.
+    fn light_between(&self, primary: &Point, key: u32, rt: &RayTracing) -> DVec3 {
+        let hidden = self
+            .environment
+            .map_or(DVec3::ZERO, |env| DVec3::from(env.radiance));
+        let mut total = DVec3::ZERO;
+        for i in 0..rt.rays {
+            let mut throughput = DVec3::ONE;
+            let mut at = Point { ..*primary };
+            for depth in 0..rt.bounces {
+                let u = sequence::sample_numbers(key, i, rt.rays, depth);
+                let Some((s, weight)) = self.sample_lobes(&at, u) else {
+                    break;
+                };
+                let ng = at.surface.geometric_normal;
+                let side = if s.dot(ng) < 0.0 { -ng } else { ng };
+                let origin = offset_ray_origin(at.surface.point, side);
+                let Some(hit) = self.scene.bvh().intersect(origin, s, 0.0, f32::INFINITY) else {
+                    break;
+                };
+                let (position, normal) = self.surface_at(&hit);
+                at = self.point(&hit, position, normal, -s);
+                let radiance = self.radiance_towards(&at, rt.shadows);
+                total += throughput * weight * (radiance - hidden);
+                throughput *= weight;
+            }
+        }
+        total / f64::from(rt.rays.max(1))
+    }
+
+    /// light_between.glsl's `sample_lobes`: the direction (f32, as the shader forms it) and the
+    /// weight f_r·(N·s)/pdf (f64).
+    fn sample_lobes(&self, at: &Point, u: [f32; 3]) -> Option<(Vec3, DVec3)> {
+        let object = &self.scene.objects()[at.object];
+        let (n, v) = (at.normal, at.view);
+        let nv = n.dot(v);
+        if nv <= 0.0 {
+            return None;
+        }
+        let f_diff = view_dependent_diffuse(object.brdf, f64::from(nv));
+        let f = object
+            .fresnel
+            .eval(f64::from(nv.min(1.0)).acos().to_degrees());
+        let specular = f.iter().sum::<f64>() as f32;
+        let diffuse = (f_diff.iter().sum::<f64>() * std::f64::consts::PI) as f32;
+        let p_specular = (specular / (specular + diffuse).max(1e-30)).clamp(0.1, 0.9);
+        let (t, b) = tangent_frame(n);
+        let phi = 2.0 * std::f32::consts::PI * u[2];
+        let around = t * phi.cos() + b * phi.sin();
+        let m = object.brdf.beckmann_m as f32;
+        let s = if u[0] < p_specular {
+            let tan2 = -m * m * (1.0 - u[1]).ln();
+            let cos_h = (1.0 + tan2).sqrt().recip();
+            let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
+            let h = around * sin_h + n * cos_h;
+            2.0 * v.dot(h) * h - v
+        } else {
+            around * u[1].sqrt() + n * (1.0 - u[1]).max(0.0).sqrt()
+        };
+        let ns = n.dot(s);
+        if ns <= 0.0 {
+            return None;
+        }
+        let (nd, vd, sd) = (n.as_dvec3(), v.as_dvec3(), s.as_dvec3());
+        let h = (vd + sd).normalize();
+        let (nh, vh) = (nd.dot(h), vd.dot(h));
+        let pdf_specular = if nh > 0.0 && vh > 0.0 {
+            beckmann_d(nh, object.brdf.beckmann_m) * nh / (4.0 * vh)
+        } else {
+            0.0
+        };
+        let p_specular = f64::from(p_specular);
+        let pdf =
+            p_specular * pdf_specular + (1.0 - p_specular) * f64::from(ns) / std::f64::consts::PI;
+        if !(pdf > 0.0) {
+            return None;
+        }
+        let f_r = DVec3::from(lacquer_brdf(object.brdf, object.fresnel, nd, vd, sd));
+        Some((s, f_r * (f64::from(ns) / pdf)))
+    }
+}
+
+/// light_between.glsl's `tangent_frame` (Duff et al.).
+fn tangent_frame(n: Vec3) -> (Vec3, Vec3) {
+    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (sign + n.z);
+    let c = n.x * n.y * a;
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * c, -sign * n.x),
+        Vec3::new(c, sign + n.y * n.y * a, -n.y),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sequence::*;
+
+    #[test]
+    fn radical_inverses_are_the_van_der_corput_sequences() {
+        assert_eq!(radical_inverse_2(0), 0.0);
+        assert_eq!(radical_inverse_2(1), 0.5);
+        assert_eq!(radical_inverse_2(2), 0.25);
+        assert_eq!(radical_inverse_2(3), 0.75);
+        assert_eq!(radical_inverse_3(1), 1.0 / 3.0);
+        assert_eq!(radical_inverse_3(2), 2.0 / 3.0);
+        assert_eq!(radical_inverse_3(3), 1.0 / 9.0);
+        assert_eq!(radical_inverse_3(5), 7.0 / 9.0);
+    }
+
+    #[test]
+    fn first_bounce_numbers_are_stratified_per_pixel() {
+        let rays = 16;
+        let key = pixel_key(7, 9, 3);
+        let mut first: Vec<f32> = (0..rays)
+            .map(|i| sample_numbers(key, i, rays, 0)[0])
+            .collect();
+        first.sort_by(f32::total_cmp);
+        // One number in each of the 16 strata (a rotation modulo 1 keeps the spacing).
+        for (k, x) in first.windows(2).enumerate() {
+            let gap = x[1] - x[0];
+            assert!((gap - 1.0 / 16.0).abs() < 1e-6, "gap {k}: {gap}");
+        }
+        assert_ne!(pixel_key(7, 9, 3), pixel_key(9, 7, 3));
+        assert_ne!(pixel_key(7, 9, 3), pixel_key(7, 9, 4));
+    }
+}
