@@ -469,6 +469,19 @@ enum ShikkiStatus shikki_scene_set_light_transport(struct ShikkiScene scene, int
 // `shadows` and `ray_tracing` are NULL or valid for one write.
 enum ShikkiStatus shikki_scene_get_light_transport(struct ShikkiScene scene, int32_t *shadows, int32_t *ray_tracing);
 
+// SPEC §6's integral (scene files' `[render] bounces`, `rays`, `seed`): `bounces` 0 (shadows
+// only) to 4, default 1; `rays` per shaded point 1 to 4096, default 8; `seed` of the sample
+// sequence (the same seed gives the same image). Out of range: INVALID_ARGUMENT naming the range,
+// the scene unchanged.
+enum ShikkiStatus shikki_scene_set_light_paths(struct ShikkiScene scene, uint32_t bounces, uint32_t rays, uint32_t seed);
+
+// The scene's bounces, rays and seed, as set by `shikki_scene_set_light_paths` or the scene
+// TOML's `[render]` table (any pointer may be NULL).
+//
+// # Safety
+// Each pointer is NULL or valid for one write.
+enum ShikkiStatus shikki_scene_get_light_paths(struct ShikkiScene scene, uint32_t *bounces, uint32_t *rays, uint32_t *seed);
+
 // The render size of the scene, so the caller can size its buffer (either pointer may be NULL).
 //
 // # Safety

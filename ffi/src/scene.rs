@@ -10,7 +10,7 @@ use glam::{DMat4, DVec3};
 use shikki::environment::{EnvironmentLight, EnvironmentSource};
 use shikki::model::LacquerMaterial;
 use shikki::output::ToneCurve;
-use shikki::raster::draw::{Background, SUPPORTED_SAMPLES};
+use shikki::raster::draw::{Background, MAX_BOUNCES, MAX_RAYS, SUPPORTED_SAMPLES};
 use shikki::raster::{default_lights, Camera, Light, MAX_LIGHTS};
 use shikki::scene::{EnvironmentModel, EnvironmentSpec, MeshSource, Scene, SceneObject};
 
@@ -474,6 +474,65 @@ pub unsafe extern "C" fn shikki_scene_get_light_transport(
         if !ray_tracing.is_null() {
             // SAFETY: non-NULL; writable by contract.
             unsafe { write_out(ray_tracing, "ray_tracing", i32::from(spec.ray_tracing)) }?;
+        }
+        Ok(())
+    })
+}
+
+/// SPEC §6's integral (scene files' `[render] bounces`, `rays`, `seed`): `bounces` 0 (shadows
+/// only) to 4, default 1; `rays` per shaded point 1 to 4096, default 8; `seed` of the sample
+/// sequence (the same seed gives the same image). Out of range: INVALID_ARGUMENT naming the range,
+/// the scene unchanged.
+#[no_mangle]
+pub extern "C" fn shikki_scene_set_light_paths(
+    scene: ShikkiScene,
+    bounces: u32,
+    rays: u32,
+    seed: u32,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        if bounces > MAX_BOUNCES {
+            return Err(FfiError::invalid(format!(
+                "bounces {bounces}: must be 0 to {MAX_BOUNCES}"
+            )));
+        }
+        if !(1..=MAX_RAYS).contains(&rays) {
+            return Err(FfiError::invalid(format!(
+                "rays {rays}: must be 1 to {MAX_RAYS}"
+            )));
+        }
+        with_scene(scene, |state| {
+            state.render.bounces = bounces;
+            state.render.rays = rays;
+            state.render.seed = seed;
+            Ok(())
+        })
+    })
+}
+
+/// The scene's bounces, rays and seed, as set by `shikki_scene_set_light_paths` or the scene
+/// TOML's `[render]` table (any pointer may be NULL).
+///
+/// # Safety
+/// Each pointer is NULL or valid for one write.
+#[no_mangle]
+pub unsafe extern "C" fn shikki_scene_get_light_paths(
+    scene: ShikkiScene,
+    bounces: *mut u32,
+    rays: *mut u32,
+    seed: *mut u32,
+) -> ShikkiStatus {
+    ffi_boundary!({
+        let spec = with_scene(scene, |state| Ok(state.render))?;
+        for (ptr, name, value) in [
+            (bounces, "bounces", spec.bounces),
+            (rays, "rays", spec.rays),
+            (seed, "seed", spec.seed),
+        ] {
+            if !ptr.is_null() {
+                // SAFETY: non-NULL; writable by contract.
+                unsafe { write_out(ptr, name, value) }?;
+            }
         }
         Ok(())
     })

@@ -35,9 +35,34 @@ pub struct BatchBench {
     /// images_per_second.median / gpu_ceiling.
     pub efficiency: f64,
     pub target: Target,
+    /// Images per second of one run of the same batch with ray tracing on (shadows, the default
+    /// bounces and rays); `None` on a device without ray queries.
+    pub ray_traced_images_per_second: Option<f64>,
 }
 
-fn jobs_toml(config: &BenchConfig) -> String {
+/// One run of the batch with ray tracing on (after the raster runs warmed the caches): jobs per
+/// second.
+fn ray_traced_rate(gpu: &GpuContext, config: &BenchConfig) -> Result<f64> {
+    let scratch = ScratchDir::new("batch-rays")?;
+    let plan = BatchPlan::parse(&jobs_toml(config, true), "bench batch", &scratch.0)?;
+    let options = BatchOptions {
+        force: true,
+        ..BatchOptions::new(scratch.0.join("out"))
+    };
+    let start = std::time::Instant::now();
+    let summary = run_batch(gpu, &plan, &options)?;
+    let jobs = plan.jobs().len();
+    if summary.failed > 0 || summary.rendered != jobs {
+        return Err(Error::invalid(
+            "bench batch",
+            format!("{} of {jobs} rendered with ray tracing", summary.rendered),
+            "every benchmark job must render; see the errors above",
+        ));
+    }
+    Ok(jobs as f64 / start.elapsed().as_secs_f64())
+}
+
+fn jobs_toml(config: &BenchConfig, ray_tracing: bool) -> String {
     let step = 360.0 / config.batch_jobs as f64;
     let orbits: Vec<String> = (0..config.batch_jobs)
         .map(|i| format!("{:.4}", i as f64 * step))
@@ -57,17 +82,20 @@ source = "builtin:studio"
 size = "{size}x{size}"
 samples = 4
 background = "env"
+[scene.render]
+ray_tracing = {ray_tracing}
 [sweep]
 "camera.orbit_deg" = [{orbits}]
 "#,
         size = config.batch_size,
-        orbits = orbits.join(", ")
+        orbits = orbits.join(", "),
     )
 }
 
 pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<BatchBench> {
     let scratch = ScratchDir::new("batch")?;
-    let plan = BatchPlan::parse(&jobs_toml(config), "bench batch", &scratch.0)?;
+    // The raster path, as the batch always measured; one run with ray tracing follows.
+    let plan = BatchPlan::parse(&jobs_toml(config, false), "bench batch", &scratch.0)?;
     let jobs = plan.jobs().len();
     let options = BatchOptions {
         force: true,
@@ -108,6 +136,10 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<BatchBench> {
             rate.push(jobs as f64 / seconds);
         }
     }
+    let ray_traced = match gpu.info().ray_query.is_enabled() {
+        true => Some(ray_traced_rate(gpu, config)?),
+        false => None,
+    };
     let gpu_per_image = Stat::of(per_image);
     let images_per_second = Stat::of(rate);
     let gpu_ceiling = 1.0 / gpu_per_image.median;
@@ -127,5 +159,6 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<BatchBench> {
             efficiency,
             EFFICIENCY_LIMIT,
         ),
+        ray_traced_images_per_second: ray_traced,
     })
 }

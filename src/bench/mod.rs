@@ -2,7 +2,8 @@
 //!
 //! One file per measurement: [`render`] (lacquer draw vs the trivial-shader floor, GPU
 //! timestamps), [`prefilter`] (GPU vs the CPU oracle), [`batch`] (images per second vs the GPU
-//! render time), [`startup`] and [`memory`] (child `shikki render` processes). [`machine`] names the
+//! render time), [`startup`] and [`memory`] (child `shikki render` processes), [`rays`] (light
+//! between objects: ray tracing on against off, acceleration structures). [`machine`] names the
 //! CPU and driver; [`table`] prints the human-readable table. Every figure is the median of
 //! `runs` runs after one warm-up run; every ratio divides two medians of the same invocation.
 //! Nothing here asserts a speed: targets are reported as verdicts, never enforced.
@@ -11,6 +12,7 @@ pub mod batch;
 pub mod machine;
 pub mod memory;
 pub mod prefilter;
+pub mod rays;
 pub mod render;
 pub mod startup;
 pub mod table;
@@ -50,15 +52,18 @@ pub enum Stage {
     Batch,
     Startup,
     Memory,
+    /// Light between objects (ray queries).
+    Rays,
 }
 
 impl Stage {
-    pub const ALL: [Stage; 5] = [
+    pub const ALL: [Stage; 6] = [
         Stage::Render,
         Stage::Prefilter,
         Stage::Batch,
         Stage::Startup,
         Stage::Memory,
+        Stage::Rays,
     ];
 }
 
@@ -189,6 +194,7 @@ pub struct BenchReport {
     pub batch: Option<batch::BatchBench>,
     pub startup: Option<startup::StartupBench>,
     pub memory: Option<memory::MemoryBench>,
+    pub rays: Option<rays::RaysBench>,
     pub targets: Vec<Target>,
 }
 
@@ -233,6 +239,10 @@ pub fn run(
         true => Some(memory::run(config)?),
         false => None,
     };
+    let rays = match stage("rays: light between objects", Stage::Rays) {
+        true => Some(rays::run(gpu, config)?),
+        false => None,
+    };
     let mut targets = Vec::new();
     if let Some(r) = &render {
         targets.push(r.target.clone());
@@ -251,6 +261,10 @@ pub fn run(
     if let Some(m) = &memory {
         targets.push(m.target.clone());
     }
+    if let Some(r) = &rays {
+        targets.push(r.target.clone());
+        targets.push(r.process_target.clone());
+    }
     Ok(BenchReport {
         shikki_version: env!("CARGO_PKG_VERSION").to_string(),
         build_profile: if cfg!(debug_assertions) {
@@ -267,6 +281,7 @@ pub fn run(
         batch,
         startup,
         memory,
+        rays,
         targets,
     })
 }

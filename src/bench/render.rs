@@ -12,7 +12,9 @@ use crate::gpu::GpuContext;
 use crate::model::LacquerMaterial;
 use crate::raster::draw::{Background, DrawOptions, MeshShading};
 use crate::raster::{default_lights, BuiltinMesh, Camera};
-use crate::scene::{EnvironmentSpec, MeshSource, OutputSpec, Scene, SceneObject, SceneRenderer};
+use crate::scene::{
+    EnvironmentSpec, MeshSource, OutputSpec, RenderSpec, Scene, SceneObject, SceneRenderer,
+};
 use crate::Result;
 
 /// The target (BENCHMARKS.md, "Targets"): lacquer draw ≤ 2 × the trivial draw of the same
@@ -72,7 +74,11 @@ pub fn bowl_scene(size: u32, samples: u32, background: Background) -> Result<Sce
         }],
         lights: default_lights(),
         environment: EnvironmentSpec::named(crate::environment::load::BUILTIN_STUDIO),
-        render: Default::default(),
+        // The raster path alone: the `rays` stage measures ray tracing.
+        render: RenderSpec {
+            ray_tracing: false,
+            ..RenderSpec::default()
+        },
         output: OutputSpec {
             width: size,
             height: size,
@@ -154,6 +160,7 @@ fn models(
     let mut scene = crate::scene::default_scene();
     scene.output.width = config.render_size;
     scene.output.height = config.render_size;
+    scene.render.ray_tracing = false;
     let (mut paper, mut brdf) = (Vec::new(), Vec::new());
     for run in 0..=config.runs {
         for model in EnvironmentModel::ALL {

@@ -45,6 +45,8 @@ pub(crate) struct ChildRun {
     pub peak_rss_kib: Option<u64>,
 }
 
+/// The default scene without ray tracing: startup and memory measure the process around the
+/// raster draw (the `rays` stage measures ray tracing, and its own child process).
 pub(crate) fn render_args(config: &BenchConfig, out: &Path) -> Vec<String> {
     vec![
         "render".into(),
@@ -52,6 +54,7 @@ pub(crate) fn render_args(config: &BenchConfig, out: &Path) -> Vec<String> {
         out.display().to_string(),
         "--size".into(),
         format!("{0}x{0}", config.startup_size),
+        "--no-ray-tracing".into(),
     ]
 }
 

@@ -114,6 +114,11 @@ pub fn markdown(report: &BenchReport) -> String {
              | batch GPU ceiling, images / s | {:.2} |\n",
             b.images_per_second.median, b.gpu_ceiling
         ));
+        if let Some(rate) = b.ray_traced_images_per_second {
+            derived.push_str(&format!(
+                "| batch images / s with ray tracing (one run) | {rate:.2} |\n"
+            ));
+        }
     }
     if let Some(s) = &r.startup {
         row(
@@ -130,6 +135,38 @@ pub fn markdown(report: &BenchReport) -> String {
             &s.driver_cache_only,
         );
         row("startup", "warm (every cache filled)".into(), &s.warm);
+    }
+    if let Some(rays) = &r.rays {
+        let what = format!(
+            "default scene {}², {} samples (GPU)",
+            rays.width, rays.samples
+        );
+        row("rays", format!("{what}, no ray tracing"), &rays.off_gpu);
+        row(
+            "rays",
+            format!(
+                "{what}, shadows + {} bounce(s) × {} rays",
+                rays.bounces, rays.rays
+            ),
+            &rays.on_gpu,
+        );
+        for b in rays.bottom_level.iter().chain([&rays.top_level]) {
+            row(
+                "rays",
+                format!(
+                    "acceleration structure build: {} ({} primitives, {:.2} MiB)",
+                    b.name,
+                    b.primitives,
+                    b.bytes as f64 / (1024.0 * 1024.0)
+                ),
+                &b.build,
+            );
+        }
+        row(
+            "rays",
+            "512² sphere-on-board `shikki render`, whole process (wall)".into(),
+            &rays.sphere_on_board_process,
+        );
     }
     if let Some(m) = &r.memory {
         derived.push_str(&format!(

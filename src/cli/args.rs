@@ -6,6 +6,7 @@ use crate::bench::Stage;
 use crate::environment::EnvironmentModel;
 use crate::output::ToneCurve;
 use crate::raster::draw::Background;
+use crate::raster::draw::{MAX_BOUNCES, MAX_RAYS};
 use crate::raster::mesh::{BuiltinMesh, BUILTIN_SEGMENTS};
 use crate::scene::RenderSpec;
 use crate::{Error, Result};
@@ -145,6 +146,14 @@ pub struct RenderArgs {
     /// without ray queries. With a scene file it overrides `[render] ray_tracing`.
     #[arg(long = "no-ray-tracing")]
     pub no_ray_tracing: bool,
+    /// Depth of the light between objects (SPEC §6): 0 (shadows only) to 4; default 1. With a
+    /// scene file it overrides `[render] bounces`.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_BOUNCES)))]
+    pub bounces: Option<u32>,
+    /// Rays per shaded point for the light between objects, 1 to 4096; default 8. With a scene
+    /// file it overrides `[render] rays`.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_RAYS)))]
+    pub rays: Option<u32>,
 }
 
 impl RenderArgs {
@@ -160,6 +169,12 @@ impl RenderArgs {
         if self.no_ray_tracing {
             sets.push("render.ray_tracing=false".into());
         }
+        if let Some(bounces) = self.bounces {
+            sets.push(format!("render.bounces={bounces}"));
+        }
+        if let Some(rays) = self.rays {
+            sets.push(format!("render.rays={rays}"));
+        }
         sets
     }
 
@@ -170,6 +185,8 @@ impl RenderArgs {
         }
         spec.shadows &= !self.no_shadows;
         spec.ray_tracing &= !self.no_ray_tracing;
+        spec.bounces = self.bounces.unwrap_or(spec.bounces);
+        spec.rays = self.rays.unwrap_or(spec.rays);
     }
 }
 
@@ -345,6 +362,8 @@ impl Default for RenderArgs {
                 env_model: None,
                 no_shadows: false,
                 no_ray_tracing: false,
+                bounces: None,
+                rays: None,
             },
         }
     }

@@ -193,7 +193,7 @@ impl Twin<'_> {
             point.view.as_dvec3(),
         );
         let nv = n.dot(v);
-        if !(nv > 0.0) {
+        if nv.is_nan() || nv <= 0.0 {
             return DVec3::ZERO;
         }
         let mut radiance = DVec3::ZERO;
@@ -298,7 +298,7 @@ impl Twin<'_> {
         let p_specular = f64::from(p_specular);
         let pdf =
             p_specular * pdf_specular + (1.0 - p_specular) * f64::from(ns) / std::f64::consts::PI;
-        if !(pdf > 0.0) {
+        if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         let f_r = DVec3::from(lacquer_brdf(object.brdf, object.fresnel, nd, vd, sd));

@@ -49,7 +49,7 @@ pub fn ray_surface(mesh: &Mesh, triangle: u32, position: Vec3, n: Vec3) -> RaySu
     let (e1, e2) = (p1 - p0, p2 - p0);
     let cross_e = e1.cross(e2);
     let area2 = cross_e.dot(cross_e);
-    if !(area2 > 0.0) {
+    if area2.is_nan() || area2 <= 0.0 {
         return RaySurface {
             point: position,
             geometric_normal: n,
@@ -196,7 +196,7 @@ impl<'a> TracedScene<'a> {
         let surface = ray_surface(object.mesh, hit.triangle, position, normal);
         let (p, n) = (position.as_dvec3(), normal.as_dvec3());
         let view = (camera.eye - p).normalize();
-        if !(n.dot(view) > 0.0) {
+        if n.dot(view).is_nan() || n.dot(view) <= 0.0 {
             return [0.0; 3];
         }
         let mut radiance = DVec3::ZERO;

@@ -132,7 +132,7 @@ pub struct RenderSpec {
 }
 
 /// Rays per shaded point unless a scene says otherwise (BENCHMARKS.md, "Light between objects").
-pub const DEFAULT_RAYS: u32 = 16;
+pub const DEFAULT_RAYS: u32 = 8;
 
 impl Default for RenderSpec {
     fn default() -> Self {

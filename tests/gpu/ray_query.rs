@@ -125,13 +125,28 @@ fn info_prints_whether_ray_queries_are_available() {
     );
 }
 
-/// Without ray queries the image is today's image, byte for byte, and stderr says why once.
+/// Without ray queries the image is that of ray tracing turned off (every object alone), byte
+/// for byte, and stderr says why once.
 #[test]
 fn render_without_ray_queries_is_the_same_image_and_says_so_once() {
     let dir = tempfile::tempdir().unwrap();
-    let args = |out: &'static str| ["render", "--size", "96x96", "-o", out];
-    let on = shikki(dir.path(), true, &args("on.png"));
-    let off = shikki(dir.path(), false, &args("off.png"));
+    let on = shikki(
+        dir.path(),
+        true,
+        &[
+            "render",
+            "--size",
+            "96x96",
+            "-o",
+            "on.png",
+            "--no-ray-tracing",
+        ],
+    );
+    let off = shikki(
+        dir.path(),
+        false,
+        &["render", "--size", "96x96", "-o", "off.png"],
+    );
     let read = |name: &str| std::fs::read(dir.path().join(name)).unwrap();
     assert_eq!(read("on.png"), read("off.png"));
     let on_err = String::from_utf8_lossy(&on.stderr).into_owned();

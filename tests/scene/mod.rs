@@ -5,4 +5,5 @@ mod environment_model;
 mod errors;
 mod examples;
 mod properties;
+mod ray_tracing;
 mod renderer;

@@ -1,4 +1,5 @@
-/* light_transport — shikki_scene_set_light_transport / _get_light_transport (SPEC §6): both on
+/* light_transport — shikki_scene_set_light_transport / _get_light_transport and
+ * shikki_scene_set_light_paths / _get_light_paths (SPEC §6). Shadows and ray tracing are on
  * by default; a sphere resting on a board under a light from above renders a shadow on the board
  * with shadows on (on a device with ray queries), none with shadows off, and shadows off and ray
  * tracing off give the same bytes; the scene TOML's `[render] shadows = false` reaches the
@@ -74,6 +75,11 @@ int main(void) {
     EXPECT(shikki_scene_get_light_transport((ShikkiScene){0}, &shadows, NULL),
            SHIKKI_STATUS_INVALID_HANDLE);
     EXPECT(shikki_scene_set_light_transport((ShikkiScene){0}, 1, 1), SHIKKI_STATUS_INVALID_HANDLE);
+    uint32_t bounces = 99, count = 99, seed = 99;
+    EXPECT(shikki_scene_get_light_paths(scene, &bounces, &count, &seed), SHIKKI_STATUS_OK);
+    EXPECT_TRUE(bounces == 1 && count == 8 && seed == 0); /* the defaults */
+    /* Shadows alone (no integral), so that shadows off traces nothing at all. */
+    EXPECT(shikki_scene_set_light_paths(scene, 0, 1, 0), SHIKKI_STATUS_OK);
 
     int warnings = 0;
     EXPECT(shikki_renderer_create(&options, &renderer), SHIKKI_STATUS_OK);
@@ -99,10 +105,23 @@ int main(void) {
     EXPECT_TRUE(traced ? dark > 20 && warnings == 0 : dark == 0 && warnings == 1);
     EXPECT_TRUE(memcmp(no_shadows, no_rays, LEN * sizeof(float)) == 0);
 
-    EXPECT(shikki_scene_create_toml("[render]\nshadows = false\n", NULL, &off_toml),
+    EXPECT(shikki_scene_create_toml("[render]\nshadows = false\nbounces = 2\nrays = 5\nseed = 9\n",
+                                    NULL, &off_toml),
            SHIKKI_STATUS_OK);
     EXPECT(shikki_scene_get_light_transport(off_toml, &shadows, &rays), SHIKKI_STATUS_OK);
     EXPECT_TRUE(shadows == 0 && rays == 1);
+
+    /* Bounces, rays and seed: the TOML's reach the handle; the defaults; ranges refused. */
+    EXPECT(shikki_scene_get_light_paths(off_toml, &bounces, &count, &seed), SHIKKI_STATUS_OK);
+    EXPECT_TRUE(bounces == 2 && count == 5 && seed == 9);
+    EXPECT(shikki_scene_set_light_paths(scene, 5, 16, 0), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_scene_set_light_paths(scene, 1, 0, 0), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_scene_set_light_paths(scene, 1, 4097, 0), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT(shikki_scene_get_light_paths(scene, &bounces, &count, NULL), SHIKKI_STATUS_OK);
+    EXPECT_TRUE(bounces == 0 && count == 1); /* unchanged by the refusals */
+    EXPECT(shikki_scene_set_light_paths(scene, 2, 8, 3), SHIKKI_STATUS_OK);
+    EXPECT(shikki_scene_get_light_paths(scene, &bounces, &count, &seed), SHIKKI_STATUS_OK);
+    EXPECT_TRUE(bounces == 2 && count == 8 && seed == 3);
 
     size_t messages = 99;
     EXPECT(shikki_renderer_validation_message_count(renderer, &messages), SHIKKI_STATUS_OK);

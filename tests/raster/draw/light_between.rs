@@ -16,6 +16,7 @@ use shikki::environment::params::ViewBlur;
 use shikki::environment::{EnvironmentLight, EnvironmentModel, Equirect, PrefilterParams};
 use shikki::gpu::GpuContext;
 use shikki::oracle::light_between::{ConstantEnvironment, Twin};
+use shikki::oracle::path_tracer::{self, PathImage, PathScene};
 use shikki::oracle::shadows::{TracedObject, TracedScene};
 use shikki::output::HdrImage;
 use shikki::raster::camera::Camera;
@@ -318,3 +319,123 @@ fn the_seed_decides_the_image() {
         "another seed changed only {differing} pixels"
     );
 }
+
+/// Whole-image relative RMSE of `image` against `reference` over the pixels both cover:
+/// sqrt(Σ d² / Σ r²) over pixels and channels.
+fn relative_rmse(image: &HdrImage, reference: &HdrImage) -> f64 {
+    let (mut err, mut norm) = (0.0, 0.0);
+    for (g, r) in image.pixels.iter().zip(&reference.pixels) {
+        if g[3] != 1.0 || r[3] != 1.0 {
+            continue;
+        }
+        for c in 0..3 {
+            let d = f64::from(g[c] - r[c]);
+            err += d * d;
+            norm += f64::from(r[c]) * f64::from(r[c]);
+        }
+    }
+    (err / norm).sqrt()
+}
+
+/// The reference's own noise in the same measure: sqrt(Σ σ² / Σ r²), σ its standard error per
+/// pixel (max over channels, so an upper bound).
+fn reference_noise(reference: &PathImage) -> f64 {
+    let (mut var, mut norm) = (0.0, 0.0);
+    for (r, sigma) in reference.mean.pixels.iter().zip(&reference.std_error) {
+        if r[3] == 1.0 {
+            var += 3.0 * sigma * sigma;
+            norm += (0..3).map(|c| f64::from(r[c]).powi(2)).sum::<f64>();
+        }
+    }
+    (var / norm).sqrt()
+}
+
+/// SPEC §6 on a 64² sphere resting on a board, `brdf` model, one bounce, under the constant sky
+/// and a directional light: the estimator converges to the brute-force path tracer
+/// (`oracle::path_tracer`, an independent formulation: it integrates the incoming light, not the
+/// difference the objects make), its error falling about as 1/√rays.
+#[test]
+fn converges_to_the_path_tracer() {
+    let Some(gpu) = gpu_or_skip() else { return };
+    let (env, irradiance) = constant_environment(&gpu);
+    let meshes = sphere_on_board();
+    let (red, black) = (material("smooth-red"), material("rough-black"));
+    let lights = vec![Light::Directional {
+        to_light: DVec3::new(0.6, 0.7, 0.4).normalize(),
+        irradiance: DVec3::new(2.0, 1.9, 1.8),
+    }];
+    let camera = camera_looking_down();
+    let case = Case {
+        meshes: &meshes,
+        materials: &[&red, &black],
+        camera: &camera,
+        lights: &lights,
+        model: EnvironmentModel::Brdf,
+        size: 64,
+    };
+    let objects: Vec<TracedObject<'_>> = meshes
+        .iter()
+        .zip([&red, &black])
+        .map(|(mesh, m)| TracedObject {
+            mesh,
+            brdf: &m.brdf,
+            fresnel: &m.fresnel,
+        })
+        .collect();
+    // The GPU's irradiance cube holds π·c to 1e-3 (its quadrature); the path tracer's sky is c.
+    let _ = irradiance;
+    let reference = path_tracer::render(
+        &PathScene {
+            objects: &objects,
+            camera: &camera,
+            lights: &lights,
+            environment: SKY.map(f64::from),
+        },
+        (64, 64),
+        1,
+        REFERENCE_PATHS,
+        11,
+    );
+    let noise = reference_noise(&reference);
+    eprintln!(
+        "path tracer, {REFERENCE_PATHS} paths per pixel: noise {:.2} %",
+        100.0 * noise
+    );
+    let mut errors = Vec::new();
+    // 8 is printed (the default's neighbour), not asserted on.
+    for rays in [4, 8, 16, 64, 256] {
+        let rt = RayTracing {
+            shadows: true,
+            bounces: 1,
+            rays,
+            seed: 5,
+        };
+        let image = gpu_render(&gpu, &case, &env, Some(rt));
+        let rmse = relative_rmse(&image, &reference.mean);
+        let beyond_noise = (rmse * rmse - noise * noise).max(0.0).sqrt();
+        eprintln!(
+            "rays {rays}: relative RMSE vs the path tracer {:.2} % ({:.2} % beyond its noise)",
+            100.0 * rmse,
+            100.0 * beyond_noise
+        );
+        if rays != 8 {
+            errors.push(rmse);
+        }
+    }
+    // 1/√rays: 2× less error per 4× the rays while the estimator's noise dominates (measured
+    // 2.6× and 2.2×; at least 1.6× asserted); from 64 rays on the figure sits on the floor of
+    // the reference's own noise (printed) and ~1 % of bias between the two formulations (the
+    // terminator: the path tracer's shadow rays leave the flat triangles, the renderer's the
+    // smooth surface), so the last step may only not rise.
+    assert!(errors[1] * 1.6 <= errors[0], "4 → 16 rays: {errors:?}");
+    assert!(errors[2] * 1.6 <= errors[1], "16 → 64 rays: {errors:?}");
+    assert!(errors[3] <= errors[2] * 1.15, "64 → 256 rays: {errors:?}");
+    assert!(
+        errors[3] <= 0.02,
+        "rays 256: {:.2} % > 2 %",
+        100.0 * errors[3]
+    );
+}
+
+/// Paths per pixel of the reference: its noise (printed) must stay well below the 2 % bound.
+const REFERENCE_PATHS: u32 = 8192;
