@@ -37,10 +37,11 @@ float specular_lobe_probability(LacquerParams p, float nv, vec3 f_diff) {
 // f_r·(N·s)/pdf(s), pdf the mixture of both lobes' densities. False when the sample is lost
 // (below the surface, or a density of 0); it still counts in the mean.
 bool sample_lobes(LacquerParams p, vec3 n, vec3 v, vec2 nv2, vec3 f_diff, vec3 u, out vec3 s,
-    out vec3 weight) {
+    out vec3 weight, out float pdf) {
     float nv = nv2.x + nv2.y;
     weight = vec3(0.0);
     s = n;
+    pdf = 0.0;
     if (nv <= 0.0) {
         return false;
     }
@@ -70,7 +71,7 @@ bool sample_lobes(LacquerParams p, vec3 n, vec3 v, vec2 nv2, vec3 f_diff, vec3 u
     float pdf_specular = nh > 0.0 && vh > 0.0
         ? beckmann_d(n, h, nh, p.beckmann_m) * nh / (4.0 * vh)
         : 0.0;
-    float pdf = p_specular * pdf_specular + (1.0 - p_specular) * ns / PI;
+    pdf = p_specular * pdf_specular + (1.0 - p_specular) * ns / PI;
     if (!(pdf > 0.0)) {
         return false;
     }
@@ -78,10 +79,16 @@ bool sample_lobes(LacquerParams p, vec3 n, vec3 v, vec2 nv2, vec3 f_diff, vec3 u
     return true;
 }
 
-// L(s): the environment along s (the sharp layer: after intensity and rotation), which a hit
-// hides.
-vec3 hidden_environment(vec3 s) {
-    return frame.environment.x != 0 ? sharp_radiance(s) : vec3(0.0);
+// L(s), the environment a hit hides along s (after intensity and rotation), read as filtered
+// importance sampling reads it (Křivánek & Colbert): from the layer whose blur β covers the
+// sample's share of the lobe, 2πβ² = 1/(n·pdf) for n rays. The sharp map behind a sample would
+// carry the studio's edges into the estimate as noise; the footprint shrinks as rays grow, so
+// the estimate still converges to the integral.
+vec3 hidden_environment(vec3 s, float pdf, int n) {
+    if (frame.environment.x == 0) {
+        return vec3(0.0);
+    }
+    return prefiltered_radiance(s, sqrt(1.0 / (2.0 * PI * float(n) * pdf)));
 }
 
 // The integral at a shaded point: material p, unit normal n, view v, rays leaving from
@@ -105,9 +112,12 @@ vec3 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
             vec3 u = sample_numbers(key, uint(i), uint(rays), uint(depth));
             vec3 s;
             vec3 weight;
-            if (!sample_lobes(p, n, v, nv2, f_diff, u, s, weight)) {
+            float pdf;
+            if (!sample_lobes(p, n, v, nv2, f_diff, u, s, weight, pdf)) {
                 break;
             }
+            // The first bounce's rays share the lobe; a later bounce is one ray.
+            vec3 hidden = hidden_environment(s, pdf, depth == 0 ? rays : 1);
             vec3 side = dot(s, surface.geometric_normal) < 0.0 ? -surface.geometric_normal
                                                                  : surface.geometric_normal;
             RayHit hit = trace_nearest(offset_ray_origin(surface.point, side), s);
@@ -124,7 +134,7 @@ vec3 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
             v = -s;
             surface = ray_surface(hit.object, hit.triangle, position, normal);
             vec3 radiance = lacquer_radiance_towards(p, view_blur, position, n, v, surface);
-            total += throughput * weight * (radiance - hidden_environment(s));
+            total += throughput * weight * (radiance - hidden);
             throughput *= weight;
         }
     }

@@ -70,6 +70,10 @@ pub struct Quirks {
     /// lavapipe, every version: a loop's body runs once, masked, even when no lane enters it, and
     /// both sides of every `if` run under a lane mask. Rare expensive work goes to a separate
     /// dispatch over a compacted list (the prefilter's near-edge pass), not behind a condition.
+    /// Masked lanes still load through device addresses (a crash seen in the ray-traced pass):
+    /// a ray query that misses reports triangle 0 of object 0, and an object without triangles
+    /// gets another mesh's addresses, so every such load stays in bounds (visibility.glsl,
+    /// `raster/draw/mod.rs` `object_geometry`).
     pub loop_body_runs_when_no_lane_enters: bool,
     /// lavapipe before Mesa 25 (seen on 22.3; 25.0 writes them in place; the versions between
     /// were not measured): after a graphics pass, a timestamp is written at the rasterizer's next

@@ -5,7 +5,8 @@
 //! `model::lacquer_brdf` in f64.
 //!
 //! The environment is constant (radiance `c` from every direction), for which both environment
-//! models have exact values the twin can state without the GPU's cube filtering: `paper` gives
+//! models, and the hidden environment the shader reads from the layers at each sample's
+//! footprint, have exact values the twin can state without the GPU's cube filtering: `paper` gives
 //! F(acos nv)·c, `brdf` gives A(nv)·c from the albedo knots the draw uses; the diffuse half is
 //! f_diff·E_irr, E_irr the irradiance the caller passes (the GPU's irradiance cube holds π·c to
 //! its quadrature's accuracy).
