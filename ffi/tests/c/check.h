@@ -13,7 +13,7 @@ static int failures = 0;
 static int checks = 0;
 
 /* `status` must equal `want`; on an error the message must be non-empty, on success empty. */
-static void expect(const char *what, ShikkiStatus status, ShikkiStatus want) {
+static inline void expect(const char *what, ShikkiStatus status, ShikkiStatus want) {
     const char *message = shikki_last_error();
     int ok = status == want && message != NULL &&
              (want == SHIKKI_STATUS_OK ? message[0] == '\0' : message[0] != '\0');
@@ -25,8 +25,22 @@ static void expect(const char *what, ShikkiStatus status, ShikkiStatus want) {
 
 #define EXPECT(call, want) expect(#call, (call), (want))
 
+/* As expect, and the message must contain `needle` (the message names the problem). */
+static inline void expect_message(const char *what, ShikkiStatus status, ShikkiStatus want,
+                           const char *needle) {
+    const char *message = shikki_last_error();
+    if (message != NULL && strstr(message, needle) == NULL) {
+        checks++;
+        failures++;
+        printf("FAIL %s: message lacks \"%s\": %s\n", what, needle, message);
+    }
+    expect(what, status, want);
+}
+
+#define EXPECT_MESSAGE(call, want, needle) expect_message(#call, (call), (want), (needle))
+
 /* `condition` must hold. */
-static void expect_true(const char *what, int condition) {
+static inline void expect_true(const char *what, int condition) {
     checks++;
     if (!condition) failures++;
     printf("%s %s\n", condition ? "ok  " : "FAIL", what);

@@ -6,52 +6,13 @@
  * ffi/tests/c_api.rs, also under valgrind and ASan+UBSan. Prints one line per check; exit
  * status = number of failed checks.
  */
-#include <shikki.h>
+#include "check.h"
 
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static int failures = 0;
-static int checks = 0;
-
-/* `status` must equal `want`; on an error the message must be non-empty, on success empty. */
-static void expect(const char *what, ShikkiStatus status, ShikkiStatus want) {
-    const char *message = shikki_last_error();
-    int ok = status == want && message != NULL &&
-             (want == SHIKKI_STATUS_OK ? message[0] == '\0' : message[0] != '\0');
-    checks++;
-    if (!ok) failures++;
-    printf("%s %s: status %d (want %d): %s\n", ok ? "ok  " : "FAIL", what, (int)status,
-           (int)want, message ? message : "(NULL message)");
-}
-
-#define EXPECT(call, want) expect(#call, (call), (want))
-
-/* As expect, and the message must contain `needle` (the message names the problem). */
-static void expect_message(const char *what, ShikkiStatus status, ShikkiStatus want,
-                           const char *needle) {
-    const char *message = shikki_last_error();
-    if (message != NULL && strstr(message, needle) == NULL) {
-        checks++;
-        failures++;
-        printf("FAIL %s: message lacks \"%s\": %s\n", what, needle, message);
-    }
-    expect(what, status, want);
-}
-
-#define EXPECT_MESSAGE(call, want, needle) expect_message(#call, (call), (want), (needle))
-
-/* `condition` must hold. */
-static void expect_true(const char *what, int condition) {
-    checks++;
-    if (!condition) failures++;
-    printf("%s %s\n", condition ? "ok  " : "FAIL", what);
-}
-
-#define EXPECT_TRUE(condition) expect_true(#condition, (condition))
 
 /* An octahedron: 6 vertices, 8 outward-facing (counter-clockwise) triangles. */
 static const float octa_positions[] = {1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1};
