@@ -239,7 +239,9 @@ pub fn run(
         true => Some(memory::run(config)?),
         false => None,
     };
-    let rays = match stage("rays: light between objects", Stage::Rays) {
+    // A device without ray queries has nothing to measure here: the stage reports as not run.
+    let traced = gpu.info().ray_query.is_enabled();
+    let rays = match traced && stage("rays: light between objects", Stage::Rays) {
         true => Some(rays::run(gpu, config)?),
         false => None,
     };

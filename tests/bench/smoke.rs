@@ -111,11 +111,29 @@ fn quick_bench_reports_every_stage_as_json() {
         field(&report, "render.triangles").as_u64() > Some(50_000),
         "the render benchmark draws the ~100k-triangle bowl"
     );
+    // The `rays` stage runs where the device has ray queries (issue 17's two targets).
+    let traced = !report["rays"].is_null();
+    assert_eq!(
+        traced,
+        crate::common::validated_gpu().info().ray_query.is_enabled(),
+        "the rays stage runs exactly where the device has ray queries"
+    );
+    if traced {
+        for path in [
+            "rays.off_gpu",
+            "rays.on_gpu",
+            "rays.sphere_on_board_process",
+        ] {
+            positive_median(&report, path);
+        }
+        field(&report, "rays.bottom_level");
+        field(&report, "batch.ray_traced_images_per_second");
+    }
     let targets = field(&report, "targets").as_array().unwrap();
     assert_eq!(
         targets.len(),
-        7,
-        "one verdict per target of issue 7, and issue 16's brdf/paper ratio"
+        if traced { 9 } else { 7 },
+        "one verdict per target of issue 7, issue 16's brdf/paper ratio and issue 17's two"
     );
     for target in targets {
         for key in ["description", "value", "limit", "met"] {
