@@ -126,13 +126,12 @@ vec3 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
             }
             vec3 position;
             vec3 normal;
-            surface_at(hit.object, hit.triangle, hit.barycentrics, position, normal);
+            surface = hit_surface(hit.object, hit.triangle, hit.barycentrics, position, normal);
             ObjectMaterial m = FETCH_OBJECT_MATERIAL(object_material, hit.object);
             vec3 view_blur = vec3(m.beta_normal, m.beta_grazing, m.beta_power);
             p = lacquer_params(m);
             n = normal;
             v = -s;
-            surface = ray_surface(hit.object, hit.triangle, position, normal);
             vec3 radiance = lacquer_radiance_towards(p, view_blur, position, n, v, surface);
             total += throughput * weight * (radiance - hidden);
             throughput *= weight;

@@ -42,19 +42,8 @@ void fetch_triangle(int object, int triangle, out vec3 p[3], out vec3 normal[3])
     }
 }
 
-// The point of triangle `triangle` of `object` at barycentrics (u, v) of vertices 1 and 2 (a
-// ray query's), and its unit shading normal: what the rasteriser would have interpolated there.
-void surface_at(int object, int triangle, vec2 uv, out vec3 position, out vec3 normal) {
-    vec3 p[3];
-    vec3 n[3];
-    fetch_triangle(object, triangle, p, n);
-    float w = 1.0 - uv.x - uv.y;
-    position = w * p[0] + uv.x * p[1] + uv.y * p[2];
-    normal = normalize(w * n[0] + uv.x * n[1] + uv.y * n[2]);
-}
-
-// The surface of triangle `triangle` of `object` at the G-buffer point `position` with unit
-// shading normal `n`.
+// The surface of a triangle with vertices p (normals `normal`, as stored) at the point
+// `position` with unit shading normal `n`.
 //
 // 1. The G-buffer point is interpolated at the pixel centre, which for a multisampled edge pixel
 //    may lie outside the triangle, on its plane extended, below a concave neighbour: its
@@ -63,10 +52,7 @@ void surface_at(int object, int triangle, vec2 uv, out vec3 position, out vec3 n
 //    rays towards a light low over the surface hit the neighbouring triangles (the "shadow
 //    terminator"): the point is lifted onto the smooth surface as in Hanika, "Hacking the Shadow
 //    Terminator" (Ray Tracing Gems II, ch. 4): p' = p − Σ b_i·min(0, (p − p_i)·n_i)·n_i.
-RaySurface ray_surface(int object, int triangle, vec3 position, vec3 n) {
-    vec3 p[3];
-    vec3 normal[3];
-    fetch_triangle(object, triangle, p, normal);
+RaySurface ray_surface_of(vec3 p[3], vec3 normal[3], vec3 position, vec3 n) {
     for (int k = 0; k < 3; ++k) {
         normal[k] = normalize(normal[k]);
     }
@@ -96,6 +82,28 @@ RaySurface ray_surface(int object, int triangle, vec3 position, vec3 n) {
     }
     surface.point = lifted;
     return surface;
+}
+
+// The surface of triangle `triangle` of `object` at the G-buffer point `position` with unit
+// shading normal `n`.
+RaySurface ray_surface(int object, int triangle, vec3 position, vec3 n) {
+    vec3 p[3];
+    vec3 normal[3];
+    fetch_triangle(object, triangle, p, normal);
+    return ray_surface_of(p, normal, position, n);
+}
+
+// A ray query's hit: triangle `triangle` of `object` at barycentrics (u, v) of vertices 1 and 2.
+// The point and unit shading normal the rasteriser would have interpolated there, and where the
+// next rays leave it; the triangle is read once.
+RaySurface hit_surface(int object, int triangle, vec2 uv, out vec3 position, out vec3 normal) {
+    vec3 p[3];
+    vec3 n[3];
+    fetch_triangle(object, triangle, p, n);
+    float w = 1.0 - uv.x - uv.y;
+    position = w * p[0] + uv.x * p[1] + uv.y * p[2];
+    normal = normalize(w * n[0] + uv.x * n[1] + uv.y * n[2]);
+    return ray_surface_of(p, n, position, normal);
 }
 #endif
 

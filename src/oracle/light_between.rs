@@ -155,7 +155,7 @@ impl Twin<'_> {
         image
     }
 
-    /// ray_surface.glsl's `surface_at`.
+    /// The point and shading normal of ray_surface.glsl's `hit_surface`.
     fn surface_at(&self, hit: &BvhHit) -> (Vec3, Vec3) {
         let mesh = self.scene.objects()[hit.object as usize].mesh;
         let [(p0, n0), (p1, n1), (p2, n2)] = [0, 1, 2].map(|k| {

@@ -1,17 +1,18 @@
 //! The CPU twin of the ray-traced shading pass's lights with visibility (SPEC §6): the same
 //! triangles the GPU draws, one primary ray per pixel centre through a [`SceneBvh`], and shadow
 //! rays that leave from the same point, offset the same way, as `shaders/common/ray_surface.glsl`
-//! and `visibility.glsl` compute them (f32 throughout, step for step). Shading itself is
-//! `model::lacquer_brdf` under the punctual lights (no environment).
+//! and `visibility.glsl` compute them (f32 throughout, step for step). Shading is
+//! `oracle::light_between`'s (`model::lacquer_brdf` under the punctual lights).
 //!
 //! Where the GPU and this twin can differ: a shadow ray that grazes an edge of an occluder may
 //! hit on one side and miss on the other (two different triangle tests), so tests compare p99.
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 
 use super::bvh::SceneBvh;
-use crate::model::{lacquer_brdf, BrdfParams, FresnelTable};
+use crate::model::{BrdfParams, FresnelTable};
 use crate::output::HdrImage;
+use crate::raster::draw::RayTracing;
 use crate::raster::{Camera, Light, Mesh};
 
 /// Far enough for a directional light, as `RAY_FAR` in visibility.glsl.
@@ -149,68 +150,27 @@ impl<'a> TracedScene<'a> {
     }
 
     /// One ray per pixel centre (SPEC §1); alpha 1 where it meets an object. `shadows`: lights
-    /// with visibility, else every light seen (the image without ray tracing).
+    /// with visibility, else every light seen (the image without ray tracing). No environment:
+    /// [`Twin`](super::light_between::Twin) with its lights alone, no bounce.
     pub fn render(
         &self,
         camera: &Camera,
         lights: &[Light],
-        (width, height): (u32, u32),
+        size: (u32, u32),
         shadows: bool,
     ) -> HdrImage {
-        let mut image = HdrImage::new(width, height);
-        let eye = camera.eye.as_vec3();
-        for y in 0..height {
-            for x in 0..width {
-                let dir = camera.primary_ray(f64::from(x) + 0.5, f64::from(y) + 0.5, width, height);
-                let Some(hit) = self.bvh.intersect(eye, dir.as_vec3(), 0.0, f32::INFINITY) else {
-                    continue;
-                };
-                let [r, g, b] = self.shade(camera, lights, &hit, shadows);
-                image.set(x, y, [r as f32, g as f32, b as f32, 1.0]);
-            }
-        }
-        image
-    }
-
-    /// Radiance towards the eye from the primary hit `hit`: Σ f_r·E·(N·L)·vis.
-    fn shade(
-        &self,
-        camera: &Camera,
-        lights: &[Light],
-        hit: &super::bvh::BvhHit,
-        shadows: bool,
-    ) -> [f64; 3] {
-        let object = &self.objects[hit.object as usize];
-        let [(p0, n0), (p1, n1), (p2, n2)] = [0, 1, 2].map(|k| {
-            let index = object.mesh.indices[3 * hit.triangle as usize + k] as usize;
-            (
-                Vec3::from(object.mesh.positions[index]),
-                Vec3::from(object.mesh.normals[index]),
-            )
-        });
-        let [u, v] = hit.barycentrics;
-        let w = 1.0 - u - v;
-        // What the rasteriser interpolates at the pixel centre.
-        let position = w * p0 + u * p1 + v * p2;
-        let normal = (w * n0 + u * n1 + v * n2).normalize();
-        let surface = ray_surface(object.mesh, hit.triangle, position, normal);
-        let (p, n) = (position.as_dvec3(), normal.as_dvec3());
-        let view = (camera.eye - p).normalize();
-        if n.dot(view).is_nan() || n.dot(view) <= 0.0 {
-            return [0.0; 3];
-        }
-        let mut radiance = DVec3::ZERO;
-        for light in lights {
-            let Some((l, irradiance)) = light.incident_at(p) else {
-                continue;
-            };
-            let nl = n.dot(l);
-            if nl <= 0.0 || (shadows && !light_visible(&self.bvh, &surface, light)) {
-                continue;
-            }
-            let f_r = DVec3::from(lacquer_brdf(object.brdf, object.fresnel, n, view, l));
-            radiance += f_r * irradiance * nl;
-        }
-        radiance.to_array()
+        let twin = super::light_between::Twin {
+            scene: self,
+            lights,
+            environment: None,
+            albedo: &[],
+        };
+        let rt = RayTracing {
+            shadows,
+            bounces: 0,
+            rays: 1,
+            seed: 0,
+        };
+        twin.render(camera, size, &rt)
     }
 }

@@ -152,13 +152,20 @@ impl RenderSpec {
     /// (then the image is that of every object alone, and the renderer warns once), or when
     /// nothing would be traced.
     pub fn ray_tracing_on(&self, gpu: &crate::gpu::GpuContext) -> Option<RayTracing> {
+        self.ray_tracing_asked()
+            .filter(|_| gpu.info().ray_query.is_enabled())
+    }
+
+    /// What the scene asks to trace, whatever the device: `None` with ray tracing off or
+    /// nothing to trace.
+    pub fn ray_tracing_asked(&self) -> Option<RayTracing> {
         let rt = RayTracing {
             shadows: self.shadows,
             bounces: self.bounces,
             rays: self.rays,
             seed: self.seed,
         };
-        (self.ray_tracing && rt.traces() && gpu.info().ray_query.is_enabled()).then_some(rt)
+        (self.ray_tracing && rt.traces()).then_some(rt)
     }
 }
 

@@ -162,10 +162,8 @@ impl SceneRenderer {
                     .map(|(_, g)| g)
             })
             .collect();
-        let wants_rays =
-            scene.render.ray_tracing && (scene.render.shadows || scene.render.bounces > 0);
         if let (true, false, Some(message)) = (
-            wants_rays,
+            scene.render.ray_tracing_asked().is_some(),
             self.said_no_ray_queries,
             gpu.info().ray_query.warning(&gpu.info().name),
         ) {
