@@ -5,24 +5,21 @@
 //! on a device without ray queries.
 
 use super::shadows::{
-    bowl_in_bowl, camera_looking_down, gpu_or_skip, lights, material, relative_errors,
-    sphere_on_board, Material, RADIANCE_FLOOR,
+    bowl_in_bowl, camera_looking_down, draw, gpu_or_skip, lights, material, relative_errors,
+    sphere_on_board, traced_objects, Material, RADIANCE_FLOOR,
 };
-use crate::common::{assert_no_validation_messages, quantile, write_failure_images};
+use crate::common::{quantile, write_failure_images};
 use glam::DVec3;
 use shikki::environment::brdf_quadrature::albedo_knots;
 use shikki::environment::gpu::{GpuEnvironment, GpuPrefilter};
-use shikki::environment::params::ViewBlur;
 use shikki::environment::{EnvironmentLight, EnvironmentModel, Equirect, PrefilterParams};
 use shikki::gpu::GpuContext;
 use shikki::oracle::light_between::{ConstantEnvironment, Twin};
 use shikki::oracle::path_tracer::{self, PathImage, PathScene};
-use shikki::oracle::shadows::{TracedObject, TracedScene};
+use shikki::oracle::shadows::TracedScene;
 use shikki::output::HdrImage;
 use shikki::raster::camera::Camera;
-use shikki::raster::draw::{
-    Background, DrawObject, DrawScene, LacquerRenderer, RayTracing, RenderSettings,
-};
+use shikki::raster::draw::RayTracing;
 use shikki::raster::lights::Light;
 use shikki::raster::mesh::{self, Mesh};
 
@@ -92,51 +89,18 @@ fn gpu_render(
     env: &GpuEnvironment,
     rt: Option<RayTracing>,
 ) -> HdrImage {
-    let objects: Vec<DrawObject<'_>> = case
-        .meshes
-        .iter()
-        .zip(case.materials)
-        .map(|(mesh, m)| DrawObject {
-            mesh,
-            brdf: &m.brdf,
-            fresnel: &m.fresnel,
-            view_blur: ViewBlur::default(),
-        })
-        .collect();
-    let image = LacquerRenderer::new()
-        .render(
-            gpu,
-            &DrawScene {
-                objects: &objects,
-                camera: case.camera,
-                lights: case.lights,
-                environment: Some(env),
-                environment_model: case.model,
-                ray_tracing: rt,
-                background: Background::Transparent,
-            },
-            &RenderSettings {
-                width: case.size,
-                height: case.size,
-                samples: 1,
-            },
-        )
-        .unwrap();
-    assert_no_validation_messages(gpu);
-    image
+    draw(
+        gpu,
+        (case.meshes, case.materials),
+        (case.camera, case.lights),
+        (Some(env), case.model),
+        rt,
+        case.size,
+    )
 }
 
 fn twin_render(case: &Case<'_>, irradiance: [f64; 3], rt: &RayTracing) -> HdrImage {
-    let objects: Vec<TracedObject<'_>> = case
-        .meshes
-        .iter()
-        .zip(case.materials)
-        .map(|(mesh, m)| TracedObject {
-            mesh,
-            brdf: &m.brdf,
-            fresnel: &m.fresnel,
-        })
-        .collect();
+    let objects = traced_objects(case.meshes, case.materials);
     let albedo: Vec<_> = case
         .materials
         .iter()
@@ -373,15 +337,7 @@ fn converges_to_the_path_tracer() {
         model: EnvironmentModel::Brdf,
         size: 64,
     };
-    let objects: Vec<TracedObject<'_>> = meshes
-        .iter()
-        .zip([&red, &black])
-        .map(|(mesh, m)| TracedObject {
-            mesh,
-            brdf: &m.brdf,
-            fresnel: &m.fresnel,
-        })
-        .collect();
+    let objects = traced_objects(&meshes, &[&red, &black]);
     // The GPU's irradiance cube holds π·c to 1e-3 (its quadrature); the path tracer's sky is c.
     let _ = irradiance;
     let reference = path_tracer::render(

@@ -9,7 +9,9 @@ use crate::common;
 
 use common::{assert_no_validation_messages, quantile, validated_gpu, write_failure_images};
 use glam::{DMat4, DVec3};
+use shikki::environment::gpu::GpuEnvironment;
 use shikki::environment::params::ViewBlur;
+use shikki::environment::EnvironmentModel;
 use shikki::gpu::GpuContext;
 use shikki::model::{BrdfParams, FresnelTable, LacquerMaterial};
 use shikki::oracle::shadows::{TracedObject, TracedScene};
@@ -108,9 +110,36 @@ fn gpu_render(
     gpu: &GpuContext,
     meshes: &[Mesh],
     materials: &[&Material],
-    (camera, lights): (&Camera, &[Light]),
+    view: (&Camera, &[Light]),
     size: u32,
     shadows: bool,
+) -> HdrImage {
+    // Shadows alone: SPEC §6's integral is tested in light_between.rs.
+    let rt = shadows.then_some(RayTracing {
+        shadows: true,
+        bounces: 0,
+        rays: 1,
+        seed: 0,
+    });
+    draw(
+        gpu,
+        (meshes, materials),
+        view,
+        (None, Default::default()),
+        rt,
+        size,
+    )
+}
+
+/// The draw every test here and in light_between.rs makes: `meshes[i]` in `materials[i]`, one
+/// sample per pixel, transparent background, validation checked.
+pub(super) fn draw(
+    gpu: &GpuContext,
+    (meshes, materials): (&[Mesh], &[&Material]),
+    (camera, lights): (&Camera, &[Light]),
+    (environment, environment_model): (Option<&GpuEnvironment>, EnvironmentModel),
+    ray_tracing: Option<RayTracing>,
+    size: u32,
 ) -> HdrImage {
     let objects: Vec<DrawObject<'_>> = meshes
         .iter()
@@ -129,15 +158,9 @@ fn gpu_render(
                 objects: &objects,
                 camera,
                 lights,
-                environment: None,
-                environment_model: Default::default(),
-                // Shadows alone: SPEC §6's integral is tested in light_between.rs.
-                ray_tracing: shadows.then_some(RayTracing {
-                    shadows: true,
-                    bounces: 0,
-                    rays: 1,
-                    seed: 0,
-                }),
+                environment,
+                environment_model,
+                ray_tracing,
                 background: Background::Transparent,
             },
             &RenderSettings {
@@ -151,14 +174,12 @@ fn gpu_render(
     image
 }
 
-fn twin_render(
-    meshes: &[Mesh],
-    materials: &[&Material],
-    (camera, lights): (&Camera, &[Light]),
-    size: u32,
-    shadows: bool,
-) -> HdrImage {
-    let objects: Vec<TracedObject<'_>> = meshes
+/// `meshes[i]` in `materials[i]` as the CPU twins trace them.
+pub(super) fn traced_objects<'a>(
+    meshes: &'a [Mesh],
+    materials: &[&'a Material],
+) -> Vec<TracedObject<'a>> {
+    meshes
         .iter()
         .zip(materials)
         .map(|(mesh, m)| TracedObject {
@@ -166,8 +187,22 @@ fn twin_render(
             brdf: &m.brdf,
             fresnel: &m.fresnel,
         })
-        .collect();
-    TracedScene::new(&objects).render(camera, lights, (size, size), shadows)
+        .collect()
+}
+
+fn twin_render(
+    meshes: &[Mesh],
+    materials: &[&Material],
+    (camera, lights): (&Camera, &[Light]),
+    size: u32,
+    shadows: bool,
+) -> HdrImage {
+    TracedScene::new(&traced_objects(meshes, materials)).render(
+        camera,
+        lights,
+        (size, size),
+        shadows,
+    )
 }
 
 /// Per pixel covered by both: max over channels of |a − b| / max(b, RADIANCE_FLOOR).
