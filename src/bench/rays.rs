@@ -199,38 +199,17 @@ fn process_runs(config: &BenchConfig) -> Result<Stat> {
         path: scene.clone(),
         message: e.to_string(),
     })?;
-    let exe = std::env::current_exe().map_err(|source| Error::Read {
-        path: "current executable".into(),
-        source,
-    })?;
+    let args = [
+        "render".to_string(),
+        scene.display().to_string(),
+        "-o".into(),
+        scratch.0.join("out.png").display().to_string(),
+    ];
     let mut times = Vec::new();
     for run in 0..=config.runs {
-        let start = std::time::Instant::now();
-        let output = std::process::Command::new(&exe)
-            .arg("render")
-            .arg(&scene)
-            .arg("-o")
-            .arg(scratch.0.join("out.png"))
-            .env("SHIKKI_PIPELINE_CACHE", scratch.0.join("pipelines.bin"))
-            .env("MESA_SHADER_CACHE_DIR", scratch.0.join("mesa"))
-            .output()
-            .map_err(|source| Error::Read {
-                path: exe.clone(),
-                source,
-            })?;
-        let seconds = start.elapsed().as_secs_f64();
-        if !output.status.success() {
-            return Err(Error::invalid(
-                "bench child render",
-                exe.display(),
-                format!(
-                    "`shikki render` failed: {}",
-                    String::from_utf8_lossy(&output.stderr).trim()
-                ),
-            ));
-        }
+        let child = super::startup::run_shikki(&args, &scratch.0, &scratch.0.join("mesa"))?;
         if run > 0 {
-            times.push(seconds);
+            times.push(child.seconds);
         }
     }
     Ok(Stat::of(times))

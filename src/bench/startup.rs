@@ -58,10 +58,21 @@ pub(crate) fn render_args(config: &BenchConfig, out: &Path) -> Vec<String> {
     ]
 }
 
-/// Runs `shikki render` with its caches in `cache_dir` and Mesa's shader cache in
-/// `driver_cache_dir`; fails with the child's stderr.
+/// Runs `shikki render` of the default scene at the startup size, with its caches in
+/// `cache_dir` and Mesa's shader cache in `driver_cache_dir`.
 pub(crate) fn run_child(
     config: &BenchConfig,
+    cache_dir: &Path,
+    driver_cache_dir: &Path,
+) -> Result<ChildRun> {
+    let out = cache_dir.join("startup.png");
+    run_shikki(&render_args(config, &out), cache_dir, driver_cache_dir)
+}
+
+/// Runs this executable with `args` (a `shikki render`), its caches in `cache_dir` and Mesa's
+/// shader cache in `driver_cache_dir`; fails with the child's stderr.
+pub(crate) fn run_shikki(
+    args: &[String],
     cache_dir: &Path,
     driver_cache_dir: &Path,
 ) -> Result<ChildRun> {
@@ -69,10 +80,9 @@ pub(crate) fn run_child(
         path: "current executable".into(),
         source,
     })?;
-    let out = cache_dir.join("startup.png");
     let start = std::time::Instant::now();
     let output = Command::new(&exe)
-        .args(render_args(config, &out))
+        .args(args)
         .env("SHIKKI_PIPELINE_CACHE", cache_dir.join("pipelines.bin"))
         .env_remove("SHIKKI_ENV_CACHE")
         .env("MESA_SHADER_CACHE_DIR", driver_cache_dir)
