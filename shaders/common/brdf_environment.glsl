@@ -10,6 +10,9 @@
 // reads the texel holding the tap's direction on the face that direction selects. The sampler's
 // own cube filtering leaves the edges and corners to the implementation.
 //
+// The layers it reads are the residual of the map's bright split (environment/bright.rs); the
+// bright parts come back as the frame's `env_light_*` lights, evaluated exactly (`bright_specular`).
+//
 // The includer includes frame.glsl and lacquer_brdf.glsl first and binds ENV_LAYER_TEXELS_BINDING.
 
 #ifndef BRDF_ENVIRONMENT_GLSL
@@ -111,9 +114,38 @@ vec3 albedo_at(int first, float nv) {
     return a + (b - a) * t;
 }
 
-// ∫ f_spec(N, V, s)·L(s)·(N·s) dω_s at a surface point (unit n, v; nv = N·V > 0): the weighted
-// mean of the lookups times the directional albedo A(nv), Σ w·L / Σ w · A(nv), exact in a white
-// furnace at every nv.
+// The map's bright parts, taken out of the layers as directional lights (environment/bright.rs,
+// `bright_specular` in the twin): Σ f_spec·E·(N·l) = Σ F·D·G·E/(4·nv), exact per light.
+vec3 bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
+    vec3 sum = vec3(0.0);
+    for (int i = 0; i < frame.environment.z; ++i) {
+        vec3 l = frame.env_light_direction[i].xyz;
+        float nl = dot(n, l);
+        vec3 half_sum = v + l;
+        float half_len = length(half_sum);
+        if (nl <= 0.0 || half_len <= 0.0) {
+            continue;
+        }
+        vec3 h = half_sum / half_len;
+        float nh = dot(n, h);
+        // A light this far outside the lobe has D below e^-50 of its peak: a term under f32's
+        // resolution of any pixel it could be added to, skipped before the Fresnel table and exp.
+        vec3 c = cross(n, h);
+        if (nh <= 0.0 || dot(c, c) > 50.0 * p.beckmann_m * p.beckmann_m * nh * nh) {
+            continue;
+        }
+        float vh = dot(v, h);
+        float d = beckmann_d(n, h, nh, p.beckmann_m);
+        float g = cook_torrance_g(nh, nv, nl, vh);
+        vec3 f = fresnel_table(angle_deg_of_cos(min(vh, 1.0)), p.fresnel_first, p.fresnel_count);
+        sum += f * (d * g / (4.0 * nv)) * frame.env_light_irradiance[i].rgb;
+    }
+    return sum;
+}
+
+// ∫ f_spec(N, V, s)·L(s)·(N·s) dω_s at a surface point (unit n, v; nv = N·V > 0): the bright
+// lights, plus the weighted mean of the residual's lookups times the directional albedo A(nv),
+// Σ w·L / Σ w · A(nv), exact in a white furnace at every nv.
 vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
     vec3 along = v - nv * n;
     float along2 = dot(along, along);
@@ -150,9 +182,10 @@ vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
         }
     }
     vec3 a = albedo_at(p.albedo_first, nv);
-    return vec3(weights.r > 0.0 ? sum.r / weights.r * a.r : 0.0,
-                weights.g > 0.0 ? sum.g / weights.g * a.g : 0.0,
-                weights.b > 0.0 ? sum.b / weights.b * a.b : 0.0);
+    vec3 lookups = vec3(weights.r > 0.0 ? sum.r / weights.r * a.r : 0.0,
+                        weights.g > 0.0 ? sum.g / weights.g * a.g : 0.0,
+                        weights.b > 0.0 ? sum.b / weights.b * a.b : 0.0);
+    return lookups + bright_specular(p, n, v, nv);
 }
 
 #endif

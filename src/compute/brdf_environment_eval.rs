@@ -31,7 +31,8 @@ const BINDINGS: [Binding; 6] = [
 
 /// The specular integral of the `brdf` model, in GLSL, at (n, v) pairs (the material's
 /// directional albedo from `albedo_knots`) (world frame; v towards
-/// the eye), for one environment: RGB per pair. The vectors are normalised in f64 before the
+/// the eye), for one environment (with its bright split when one is attached, as a draw reads it):
+/// RGB per pair. The vectors are normalised in f64 before the
 /// conversion to f32, so the GPU sees the unit vectors the CPU twin sees.
 pub fn brdf_environment_specular_gpu(
     gpu: &GpuContext,
@@ -59,9 +60,12 @@ pub fn brdf_environment_specular_gpu(
         &BINDINGS,
         constants.words(),
     )?;
+    // The draw's sources: an attached bright split's residual and lights, else the map itself.
+    let (residual, lights) = env.brdf_sources();
     let mut frame = Frame::zeroed();
-    frame.environment = [1, env.layers.len() as i32, 0, 0];
-    frame.set_environment_layers(&env.betas, &env.layer_faces());
+    frame.environment = [1, residual.layers.len() as i32, 0, 0];
+    frame.set_environment_layers(&residual.betas, &residual.layer_faces());
+    frame.set_bright_lights(lights);
     let mut knots = fresnel_knots(fresnel);
     let material = ObjectMaterial {
         albedo_first: knots.len() as f32,
@@ -110,7 +114,7 @@ pub fn brdf_environment_specular_gpu(
     dirs_buf.write(&directions)?;
     let values_buf =
         gpu.create_buffer(BufferDesc::readback("env eval values", (rows * 16) as u64))?;
-    let texels = env.layer_texels(gpu)?;
+    let texels = residual.layer_texels(gpu)?;
     let set = gpu.create_descriptor_set(
         pipeline.layout(),
         &[

@@ -13,12 +13,13 @@ use glam::DVec3;
 use std::f64::consts::PI;
 
 use super::brdf_definition::specular_albedo;
+use super::bright::BrightLight;
 use super::cube::{direction_to_face, face_direction};
 use super::image::{CubeImage, PrefilteredEnvironment};
 use super::params::layer_blend;
 use crate::gpu::shaders::interface::ALBEDO_KNOTS;
 use crate::model::brdf::cook_torrance_g;
-use crate::model::{BrdfParams, FresnelTable};
+use crate::model::{lacquer_specular, BrdfParams, FresnelTable};
 
 /// Lobe samples per shaded point in the renderer (the shaders' `ENV_SAMPLES`): the cost and
 /// accuracy are measured in BENCHMARKS.md ("The `brdf` environment model").
@@ -155,6 +156,41 @@ pub fn specular_quadrature(
         true => sum[c] / weights[c] * a[c],
         false => 0.0,
     })
+}
+
+/// The map's bright lights (bright.rs) through the specular lobe, Σ f_spec·E·(N·l): the twin of
+/// brdf_environment.glsl's `bright_specular`.
+pub fn bright_specular(
+    lights: &[BrightLight],
+    brdf: &BrdfParams,
+    fresnel: &FresnelTable,
+    n: DVec3,
+    v: DVec3,
+) -> [f64; 3] {
+    let mut sum = [0.0; 3];
+    for light in lights {
+        let f = lacquer_specular(brdf, fresnel, n, v, light.direction);
+        let nl = n.dot(light.direction).max(0.0);
+        for c in 0..3 {
+            sum[c] += f[c] * nl * light.irradiance[c];
+        }
+    }
+    sum
+}
+
+/// The `brdf` model's specular term as the renderer computes it: the bright lights plus the
+/// quadrature over the residual's layers (`sources` from the map's bright split; a map without
+/// bright parts is its own residual, with no lights).
+pub fn brdf_specular(
+    (residual, lights): (&PrefilteredEnvironment, &[BrightLight]),
+    samples: u32,
+    material: (&BrdfParams, &FresnelTable, &[[f32; 4]]),
+    n: DVec3,
+    v: DVec3,
+) -> [f64; 3] {
+    let lookups = specular_quadrature(residual, samples, material, n, v);
+    let bright = bright_specular(lights, material.0, material.1, n, v);
+    std::array::from_fn(|c| lookups[c] + bright[c])
 }
 
 /// Lpre(d, β) from the layers (SPEC §4: linear in β between layers 0 and 1, in log β above),

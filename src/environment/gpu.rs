@@ -11,6 +11,7 @@
 //! Every cube lives in a storage buffer while the steps write it and is read as a texel buffer
 //! (quirk `ssbo_gather_is_per_lane`); the last step copies the buffers into the cube images.
 
+use super::bright::BrightLight;
 use super::image::{CubeImage, Equirect, PrefilteredEnvironment};
 use super::params::{
     equirect_supersample, EnvironmentLight, LayerPlan, PrefilterParams, LOBE_CUTOFF, MAX_FACE_SIZE,
@@ -85,6 +86,16 @@ pub struct GpuEnvironment {
     /// Every layer's texels in one texel buffer (the `brdf` model's lookups), made by the first
     /// draw that needs it: [`GpuEnvironment::layer_texels`].
     layer_texels: std::sync::OnceLock<Buffer>,
+    /// The `brdf` model's sources, attached by the renderer the first time a draw in that model
+    /// uses this map: [`GpuEnvironment::brdf_sources`].
+    bright: std::sync::OnceLock<Box<BrightEnvironment>>,
+}
+
+/// What the `brdf` model reads of a map (bright.rs): the residual's layers, and the bright parts
+/// taken out of it as directional lights (world frame).
+pub struct BrightEnvironment {
+    pub residual: GpuEnvironment,
+    pub lights: Vec<BrightLight>,
 }
 
 /// The index of each layer's first texel when the layers of `faces` are stored one after the
@@ -125,6 +136,27 @@ impl GpuEnvironment {
             layers,
             irradiance,
             layer_texels: std::sync::OnceLock::new(),
+            bright: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// Attaches the map's bright split (the first one attached stays).
+    pub fn attach_bright(&self, bright: BrightEnvironment) {
+        let _ = self.bright.set(Box::new(bright));
+    }
+
+    /// Whether [`attach_bright`](Self::attach_bright) was called.
+    pub fn has_bright(&self) -> bool {
+        self.bright.get().is_some()
+    }
+
+    /// What the `brdf` model's lookups read and the lights it adds: the attached split's residual
+    /// and lights, or without one this map itself and no lights (an environment uploaded by hand,
+    /// as tests do, or one with no bright part).
+    pub fn brdf_sources(&self) -> (&GpuEnvironment, &[BrightLight]) {
+        match self.bright.get() {
+            Some(bright) => (&bright.residual, &bright.lights),
+            None => (self, &[]),
         }
     }
 

@@ -16,6 +16,7 @@
 
 pub mod brdf_definition;
 pub mod brdf_quadrature;
+pub mod bright;
 pub mod cube;
 pub mod definition;
 pub mod disk_cache;

@@ -7,6 +7,8 @@
 //!    ─► disk cache holds it? ── yes ─► upload
 //!                            └─ no ──► GPU prefilter (× intensity, rotated) ─► store
 //! ```
+//! The `brdf` model also asks for the map's bright split (`bright.rs`): the same steps for the
+//! residual map, beside the lights taken out of it.
 //!
 //! Owns the order of those steps and the warnings they raise, returned to the caller, never
 //! printed. Decoding (`load`), the cache file format (`disk_cache`) and the prefilter itself
@@ -15,8 +17,9 @@
 use std::borrow::Cow;
 use std::sync::Arc;
 
+use super::bright::split_bright;
 use super::disk_cache::{CacheKey, EnvironmentDiskCache};
-use super::gpu::{default_params, GpuEnvironment, GpuPrefilter};
+use super::gpu::{default_params, BrightEnvironment, GpuEnvironment, GpuPrefilter};
 use super::image::Equirect;
 use super::load::{load_environment, LoadedEnvironment};
 use super::params::{EnvironmentLight, PrefilterParams};
@@ -126,17 +129,44 @@ impl EnvironmentPreparer {
     ) -> Result<GpuEnvironment> {
         let loaded = source.load()?;
         self.note_replaced_pixels(&loaded, warnings);
-        let params = default_params(gpu, loaded.image.width);
+        self.prepare_image(gpu, &loaded.image, light, warnings)
+    }
+
+    /// The `brdf` model's sources for `source` (bright.rs): the map's bright parts as lights in
+    /// the world, and its residual prefiltered as [`prepare`](Self::prepare) does a map (the disk
+    /// cache keeps it under the residual's own key).
+    pub fn prepare_bright(
+        &mut self,
+        gpu: &GpuContext,
+        source: &EnvironmentSource,
+        light: EnvironmentLight,
+        warnings: &mut Vec<Warning>,
+    ) -> Result<BrightEnvironment> {
+        let loaded = source.load()?;
+        let split = split_bright(&loaded.image);
+        let lights = split.lights_in_world(light);
+        let residual = self.prepare_image(gpu, &split.residual, light, warnings)?;
+        Ok(BrightEnvironment { residual, lights })
+    }
+
+    fn prepare_image(
+        &mut self,
+        gpu: &GpuContext,
+        image: &Equirect,
+        light: EnvironmentLight,
+        warnings: &mut Vec<Warning>,
+    ) -> Result<GpuEnvironment> {
+        let params = default_params(gpu, image.width);
         let key = self
             .disk_cache
             .as_ref()
-            .map(|_| CacheKey::new(&loaded.image, &params, light));
+            .map(|_| CacheKey::new(image, &params, light));
         if let Some(key) = &key {
             if let Some(env) = self.cached(gpu, key, &params, warnings) {
                 return Ok(env);
             }
         }
-        let env = self.prefilter(gpu, &loaded.image, &params, light)?;
+        let env = self.prefilter(gpu, image, &params, light)?;
         if let (Some(cache), Some(key)) = (&self.disk_cache, &key) {
             let stored = env.read_back(gpu).and_then(|host| cache.store(key, &host));
             if let Err(e) = stored {

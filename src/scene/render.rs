@@ -18,7 +18,9 @@ use super::{EnvironmentSpec, MeshSource, Scene};
 use crate::environment::disk_cache::EnvironmentDiskCache;
 use crate::environment::gpu::GpuEnvironment;
 use crate::environment::params::ViewBlur;
-use crate::environment::{EnvironmentLight, EnvironmentPreparer, EnvironmentSource};
+use crate::environment::{
+    EnvironmentLight, EnvironmentModel, EnvironmentPreparer, EnvironmentSource,
+};
 use crate::gpu::GpuContext;
 use crate::model::{BrdfParams, FresnelTable};
 use crate::output::HdrImage;
@@ -142,6 +144,9 @@ impl SceneRenderer {
             ));
         }
         let env_index = self.environment(gpu, &scene.environment)?;
+        if let (Some(k), EnvironmentModel::Brdf) = (env_index, scene.render.environment_model) {
+            self.attach_bright(gpu, k)?;
+        }
         let objects: Vec<DrawObject> = meshes
             .iter()
             .zip(&shading)
@@ -283,6 +288,20 @@ impl SceneRenderer {
             prefiltered,
         });
         Ok(Some(self.environments.len() - 1))
+    }
+
+    /// Prepares the `brdf` model's bright split of cached environment `k` on its first use in
+    /// that model (a `paper` render never pays for it).
+    fn attach_bright(&mut self, gpu: &GpuContext, k: usize) -> Result<()> {
+        let cached = &self.environments[k];
+        if cached.prefiltered.has_bright() {
+            return Ok(());
+        }
+        let bright =
+            self.preparer
+                .prepare_bright(gpu, &cached.source, cached.light, &mut self.warnings)?;
+        self.environments[k].prefiltered.attach_bright(bright);
+        Ok(())
     }
 
     /// Drops the oldest prefiltered environments until at most `keep` remain.

@@ -4,8 +4,13 @@
 use glam::DVec3;
 use shikki::compute::brdf_environment_eval::brdf_environment_specular_gpu;
 use shikki::environment::brdf_definition::specular_integral_definition;
-use shikki::environment::brdf_quadrature::{albedo_knots, specular_quadrature, BRDF_SAMPLES};
+use shikki::environment::brdf_quadrature::{
+    albedo_knots, brdf_specular, specular_quadrature, BRDF_SAMPLES,
+};
+use shikki::environment::bright::split_bright;
+use shikki::environment::gpu::{BrightEnvironment, GpuEnvironment};
 use shikki::environment::{load_environment, prefilter_cpu, EnvironmentLight, PrefilterParams};
+use shikki::gpu::shaders::interface::MAX_ENV_LIGHTS;
 use shikki::model::{BrdfParams, FresnelTable};
 
 fn params(m: f64) -> BrdfParams {
@@ -129,8 +134,18 @@ fn shader_matches_its_cpu_twin() {
     let source = load_environment(path).unwrap().image;
     let prefilter = PrefilterParams::for_source_width(source.width);
     let light = EnvironmentLight::new(1.0, 30.0);
-    let env = prefilter_cpu(&source, &prefilter, light).unwrap();
-    let on_gpu = shikki::environment::gpu::GpuEnvironment::upload(&gpu, &env).unwrap();
+    // As a draw in the `brdf` model reads the map: its residual's layers and its bright lights
+    // (the courtyard has more bright pixels than lights: all MAX_ENV_LIGHTS are used).
+    let split = split_bright(&source);
+    assert_eq!(split.lights.len(), MAX_ENV_LIGHTS);
+    let lights = split.lights_in_world(light);
+    let residual = prefilter_cpu(&split.residual, &prefilter, light).unwrap();
+    let full = prefilter_cpu(&source, &prefilter, light).unwrap();
+    let on_gpu = GpuEnvironment::upload(&gpu, &full).unwrap();
+    on_gpu.attach_bright(BrightEnvironment {
+        residual: GpuEnvironment::upload(&gpu, &residual).unwrap(),
+        lights: lights.clone(),
+    });
     let fresnel = FresnelTable::dielectric(1.5, 0.0045).unwrap();
     let pairs = test_pairs();
     for m in [0.02, 0.05, 0.2, 0.5] {
@@ -140,7 +155,8 @@ fn shader_matches_its_cpu_twin() {
         let mut worst: f64 = 0.0;
         for (pair, got) in pairs.iter().zip(&got) {
             let (n, v) = (pair[0].normalize(), pair[1].normalize());
-            let want = specular_quadrature(&env, BRDF_SAMPLES, (&p, &fresnel, &albedo), n, v);
+            let material = (&p, &fresnel, &albedo[..]);
+            let want = brdf_specular((&residual, &lights), BRDF_SAMPLES, material, n, v);
             for c in 0..3 {
                 let scale = want[c].abs().max(1e-6);
                 worst = worst.max((f64::from(got[c]) - want[c]).abs() / scale);
@@ -185,12 +201,15 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
     pairs
 }
 
-/// The renderer's quadrature (BRDF_SAMPLES samples) against the brute-force integral, on the
-/// courtyard HDRI and the disc map, for m = 0.02, 0.05, 0.2, 0.5: the figures of BENCHMARKS.md
-/// ("The `brdf` environment model"). The issue asks for ≤ 1 % mean and ≤ 5 % p99; the quadrature
-/// does not reach that at the render's sample count (BENCHMARKS.md), so this test holds the
-/// measured error as a bound that catches a regression: each mean at most 1.25× its measured
-/// value (the estimator is deterministic: the same build gives the same figures).
+/// The renderer's `brdf` specular term (the map's bright lights plus BRDF_SAMPLES lookups of the
+/// residual's layers) against the brute-force integral over the whole map, on the courtyard HDRI
+/// and the disc map, for m = 0.02, 0.05, 0.2, 0.5: the figures of BENCHMARKS.md ("The `brdf`
+/// environment model"). The issue asks for ≤ 1 % mean and ≤ 5 % p99; the disc map is there or
+/// close (the split took the disc out of the lookups: its RMSE went from 4.6–50 % to 0.6–1.2 %),
+/// the courtyard is not (its error is the lookups' aliasing of the buildings' edges, BENCHMARKS.md),
+/// so this test holds the measured error as a bound that catches a regression: each mean at most
+/// 1.25× its measured value (the estimator is deterministic: the same build gives the same
+/// figures).
 #[test]
 fn error_at_the_render_sample_count() {
     let courtyard = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/courtyard.hdr");
@@ -203,12 +222,14 @@ fn error_at_the_render_sample_count() {
     let pairs = accuracy_pairs();
     // Measured means (green, relative) per map and m = 0.02, 0.05, 0.2, 0.5; see the doc comment.
     let measured = [
-        [0.0486, 0.0586, 0.1483, 0.1264],
-        [0.0047, 0.0150, 0.0341, 0.0484],
+        [0.0489, 0.0585, 0.1452, 0.1219],
+        [0.0020, 0.0034, 0.0086, 0.0158],
     ];
     for ((name, source), bounds) in maps.iter().zip(measured) {
         let prefilter = PrefilterParams::for_source_width(source.width);
-        let env = prefilter_cpu(source, &prefilter, light).unwrap();
+        let split = split_bright(source);
+        let lights = split.lights_in_world(light);
+        let residual = prefilter_cpu(&split.residual, &prefilter, light).unwrap();
         for (m, bound) in [0.02, 0.05, 0.2, 0.5].into_iter().zip(bounds) {
             let p = params(m);
             let albedo = albedo_knots(&p, &fresnel);
@@ -219,8 +240,8 @@ fn error_at_the_render_sample_count() {
                 .map(|&(n, v)| {
                     let want =
                         specular_integral_definition(source, light, &p, &fresnel, n, v, cells);
-                    let got =
-                        specular_quadrature(&env, BRDF_SAMPLES, (&p, &fresnel, &albedo), n, v);
+                    let material = (&p, &fresnel, &albedo[..]);
+                    let got = brdf_specular((&residual, &lights), BRDF_SAMPLES, material, n, v);
                     se += (got[1] - want[1]).powi(2);
                     sw += want[1].powi(2);
                     (got[1] - want[1]).abs() / want[1]
@@ -275,4 +296,63 @@ fn white_furnace_matches_the_directional_albedo() {
     }
     println!("white furnace: worst relative {worst:.2e}");
     assert!(worst <= 5e-3, "{worst}");
+}
+
+/// The renderer's way to the split (`EnvironmentPreparer::prepare_bright`): the lights turned and
+/// scaled with the map, the residual prefiltered on the device; the shader reading both (as the
+/// draw does, through the attached split) against the twin on the CPU prefilter of the same
+/// residual. The GPU prefilter matches the CPU one within 1e-3 per texel (tests/environment/
+/// gpu.rs) and the quadrature is a weighted mean of texels, so 2e-3 bounds it; a split the draw
+/// did not read (the full map's layers, lights not turned) moves the disc's highlight by 10× or
+/// more.
+#[test]
+fn the_preparer_attaches_the_split_the_shader_reads() {
+    use shikki::environment::{EnvironmentPreparer, EnvironmentSource, LoadedEnvironment};
+    let gpu = crate::common::validated_gpu();
+    let source = disc_map();
+    let light = EnvironmentLight::new(2.0, 40.0);
+    let loaded = std::sync::Arc::new(LoadedEnvironment {
+        image: source.clone(),
+        replaced_pixels: 0,
+        source: "disc".into(),
+    });
+    let mut warnings = Vec::new();
+    let bright = EnvironmentPreparer::new(None)
+        .prepare_bright(
+            &gpu,
+            &EnvironmentSource::Loaded(loaded),
+            light,
+            &mut warnings,
+        )
+        .unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let split = split_bright(&source);
+    assert!(!split.lights.is_empty());
+    assert_eq!(bright.lights, split.lights_in_world(light));
+    let prefilter = PrefilterParams::for_source_width(source.width);
+    let residual = prefilter_cpu(&split.residual, &prefilter, light).unwrap();
+    let full = prefilter_cpu(&source, &prefilter, light).unwrap();
+    let on_gpu = GpuEnvironment::upload(&gpu, &full).unwrap();
+    on_gpu.attach_bright(bright);
+    let fresnel = FresnelTable::dielectric(1.5, 0.0045).unwrap();
+    let pairs = test_pairs();
+    for m in [0.05, 0.5] {
+        let p = params(m);
+        let got = brdf_environment_specular_gpu(&gpu, &on_gpu, &p, &fresnel, &pairs).unwrap();
+        let albedo = albedo_knots(&p, &fresnel);
+        let lights = split.lights_in_world(light);
+        let mut worst: f64 = 0.0;
+        for (pair, got) in pairs.iter().zip(&got) {
+            let (n, v) = (pair[0].normalize(), pair[1].normalize());
+            let material = (&p, &fresnel, &albedo[..]);
+            let want = brdf_specular((&residual, &lights), BRDF_SAMPLES, material, n, v);
+            for c in 0..3 {
+                let scale = want[c].abs().max(1e-6);
+                worst = worst.max((f64::from(got[c]) - want[c]).abs() / scale);
+            }
+        }
+        println!("m {m}: worst relative, prepared split vs twin {worst:.2e}");
+        assert!(worst <= 2e-3, "m {m}: {worst}");
+    }
+    crate::common::assert_no_validation_messages(&gpu);
 }

@@ -17,6 +17,9 @@ shader_interface! {
         MAX_LIGHTS: usize = 16;
         /// The most environment layers K a prefilter makes and a draw samples.
         MAX_ENV_LAYERS: usize = 16;
+        /// The most bright parts of a map the `brdf` model takes out as directional lights
+        /// (environment/bright.rs; `Frame::env_light_direction`).
+        MAX_ENV_LIGHTS: usize = 32;
         /// Knots of the specular directional albedo A(nv) the `brdf` model normalises by, at
         /// nv = (k/(ALBEDO_KNOTS − 1))² (environment/brdf_quadrature.rs `albedo_knots`).
         ALBEDO_KNOTS: usize = 65;
@@ -156,7 +159,8 @@ shader_interface! {
             light_vector: [vec4; MAX_LIGHTS],
             /// rgb: irradiance E (directional) or intensity I (point).
             light_color: [vec4; MAX_LIGHTS],
-            /// x: 1 if an environment lights the scene; y: its number of layers K.
+            /// x: 1 if an environment lights the scene; y: its number of layers K; z: its bright
+            /// lights (the `brdf` model's, `env_light_*`).
             environment: ivec4,
             /// β_k, four per vec4.
             layer_beta: [vec4; MAX_ENV_LAYERS / 4],
@@ -182,6 +186,10 @@ shader_interface! {
             /// SPEC §6's integral in the ray-traced shading pass: x = rays per shaded point,
             /// y = bounces (0: none), z = the seed of the sample sequence.
             light_transport: ivec4,
+            /// The `brdf` model's bright lights (environment/bright.rs), world frame: xyz towards
+            /// the light, and rgb its irradiance.
+            env_light_direction: [vec4; MAX_ENV_LIGHTS],
+            env_light_irradiance: [vec4; MAX_ENV_LIGHTS],
         }
 
         /// Step 1's push constants (equirect_to_cube*.comp).

@@ -9,15 +9,20 @@
 
 use super::gpu_mesh::upload;
 use super::types::{DrawScene, RenderSettings};
+use crate::environment::bright::BrightLight;
 use crate::environment::gpu::{layer_texel_offsets, GpuEnvironment};
 use crate::environment::params::ViewBlur;
-use crate::gpu::shaders::interface::{Frame, ObjectMaterial, MAX_ENV_LAYERS, MAX_LIGHTS};
+use crate::environment::EnvironmentModel;
+use crate::gpu::shaders::interface::{
+    Frame, ObjectMaterial, MAX_ENV_LAYERS, MAX_ENV_LIGHTS, MAX_LIGHTS,
+};
 use crate::gpu::{Buffer, BufferUsage, GpuContext};
 use crate::model::{BrdfParams, FresnelTable};
 use crate::raster::camera::Camera;
 use crate::raster::lights::Light;
 use crate::Result;
 use bytemuck::Zeroable;
+use glam::DVec3;
 
 /// A Fresnel table's knots as the shaders read them, one RGBA32F texel each:
 /// (angle_deg, r, g, b).
@@ -85,6 +90,8 @@ pub(crate) struct EnvironmentUniforms {
     pub layer_betas: Vec<f64>,
     /// Each layer's face size (the `brdf` model's texel lookups).
     pub layer_faces: Vec<u32>,
+    /// The `brdf` model's bright lights (world frame); empty in the `paper` model.
+    pub bright_lights: Vec<BrightLight>,
 }
 
 fn vec4(v: glam::DVec3, w: f32) -> [f32; 4] {
@@ -106,6 +113,17 @@ impl Frame {
             self.layer_face_size[k / 4][k % 4] = face as i32;
             // GpuEnvironment::layer_texels refuses more texels than an i32 indexes.
             self.layer_first_texel[k / 4][k % 4] = first as i32;
+        }
+    }
+
+    /// Packs the `brdf` model's bright lights (at most `MAX_ENV_LIGHTS`, which
+    /// `bright::split_bright` never exceeds); also used by the compute evaluator.
+    pub(crate) fn set_bright_lights(&mut self, lights: &[BrightLight]) {
+        let count = lights.len().min(MAX_ENV_LIGHTS);
+        self.environment[2] = count as i32;
+        for (i, light) in lights.iter().take(count).enumerate() {
+            self.env_light_direction[i] = vec4(light.direction, 0.0);
+            self.env_light_irradiance[i] = vec4(DVec3::from(light.irradiance), 0.0);
         }
     }
 
@@ -144,6 +162,7 @@ impl Frame {
             ..Frame::zeroed()
         };
         frame.set_environment_layers(&environment.layer_betas, &environment.layer_faces);
+        frame.set_bright_lights(&environment.bright_lights);
         for (i, light) in lights.iter().take(MAX_LIGHTS).enumerate() {
             let (vector, color) = match *light {
                 Light::Directional {
@@ -233,6 +252,10 @@ impl DrawBuffers {
                 enabled: scene.environment.is_some(),
                 layer_betas: environment.betas.clone(),
                 layer_faces: environment.layer_faces(),
+                bright_lights: match scene.environment_model {
+                    EnvironmentModel::Brdf => environment.brdf_sources().1.to_vec(),
+                    EnvironmentModel::Paper => Vec::new(),
+                },
             },
         );
         let mut knots: Vec<[f32; 4]> = Vec::new();

@@ -326,7 +326,7 @@ fn draw_deferred(
     };
     // The `paper` model never reads the layer texels: any texel buffer fills the binding.
     let layer_texels = match scene.environment_model {
-        EnvironmentModel::Brdf => inputs.environment.layer_texels(gpu)?,
+        EnvironmentModel::Brdf => inputs.environment.brdf_sources().0.layer_texels(gpu)?,
         EnvironmentModel::Paper => &buffers.knots,
     };
     let object_sets = inputs.object_sets(&gbuffer, buffers)?;

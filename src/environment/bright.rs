@@ -1,0 +1,244 @@
+//! The `brdf` model's bright split: the few brightest parts of a map (a sun, a studio lamp) taken
+//! out of it as directional lights, whose specular term is then evaluated exactly, f_spec·E·(N·l),
+//! instead of through the lobe quadrature's lookups. A lookup blurs a source into its footprint and
+//! finds a small one only when a sample's footprint happens to cover it; one light per bright
+//! block has neither problem. Everything else (the residual, bright pixels clamped to the
+//! threshold) is prefiltered and read by the quadrature as before. Residual plus lights is the map
+//! exactly: each bright pixel p gives the light (p − p·T/Y)·dω and keeps p·T/Y. Measured in
+//! BENCHMARKS.md ("The `brdf` environment model").
+
+use glam::DVec3;
+use std::f64::consts::PI;
+
+use super::cube::world_to_environment;
+use super::image::Equirect;
+use super::params::EnvironmentLight;
+use crate::gpu::shaders::interface::MAX_ENV_LIGHTS;
+
+/// A pixel is bright when its luminance exceeds this many times the map's mean luminance (over the
+/// sphere). Above it a source is small and bright enough for the quadrature to alias it; below it
+/// the residual's contrast is what the lookups handle (BENCHMARKS.md).
+pub const BRIGHT_THRESHOLD: f64 = 16.0;
+
+/// Maps wider than this are split in blocks of `width / BRIGHT_GRID_WIDTH` pixels square, so a sun
+/// takes as few lights at 8k as at 1k.
+const BRIGHT_GRID_WIDTH: u32 = 1024;
+
+/// A bright block as a directional light: towards it, and its irradiance at normal incidence.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BrightLight {
+    pub direction: DVec3,
+    pub irradiance: [f64; 3],
+}
+
+/// A map split into its residual and at most `MAX_ENV_LIGHTS` bright lights (map frame, before the
+/// environment's intensity and rotation).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BrightSplit {
+    pub residual: Equirect,
+    pub lights: Vec<BrightLight>,
+}
+
+impl BrightSplit {
+    /// The lights as the scene sees them: × intensity, turned by the rotation about +Y (SPEC §4).
+    pub fn lights_in_world(&self, light: EnvironmentLight) -> Vec<BrightLight> {
+        self.lights
+            .iter()
+            .map(|l| BrightLight {
+                // world_to_environment turns by −ρ; by +ρ is the way back.
+                direction: world_to_environment(l.direction, -light.rotation_deg),
+                irradiance: l.irradiance.map(|e| e * light.intensity),
+            })
+            .collect()
+    }
+}
+
+/// Rec. 709 luminance of linear RGB.
+fn luminance(p: [f32; 3]) -> f64 {
+    0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
+}
+
+/// Solid angle of a pixel in row `y` of `height` rows, `width` columns (SPEC §1's equirect).
+fn pixel_solid_angle(y: u32, width: u32, height: u32) -> f64 {
+    let top = PI * f64::from(y) / f64::from(height);
+    let bottom = PI * f64::from(y + 1) / f64::from(height);
+    2.0 * PI / f64::from(width) * (top.cos() - bottom.cos())
+}
+
+/// The direction of pixel (x, y)'s centre (SPEC §4's inverse mapping).
+fn pixel_direction(x: u32, y: u32, width: u32, height: u32) -> DVec3 {
+    let theta = PI * (f64::from(y) + 0.5) / f64::from(height);
+    let phi = 2.0 * PI * ((f64::from(x) + 0.5) / f64::from(width) - 0.5);
+    DVec3::new(
+        theta.sin() * phi.sin(),
+        theta.cos(),
+        -theta.sin() * phi.cos(),
+    )
+}
+
+/// One block's share of the bright part: which pixels, what they give.
+struct Block {
+    pixels: Vec<(usize, [f32; 3])>,
+    irradiance: [f64; 3],
+    /// Σ luminance-of-excess × direction: the light's direction, normalised.
+    centroid: DVec3,
+    weight: f64,
+}
+
+/// Splits `map` (see the module doc). Pixels above `BRIGHT_THRESHOLD` × the mean luminance are
+/// bright; they are grouped in blocks (one pixel up to `BRIGHT_GRID_WIDTH` wide), and the
+/// `MAX_ENV_LIGHTS` blocks with the most excess become lights. Bright pixels of the blocks not
+/// kept stay in the residual as they are, so nothing is lost either way.
+pub fn split_bright(map: &Equirect) -> BrightSplit {
+    let (w, h) = (map.width, map.height);
+    let mut total = 0.0;
+    for y in 0..h {
+        let dw = pixel_solid_angle(y, w, h);
+        for x in 0..w {
+            total += luminance(map.pixels[(y * w + x) as usize]) * dw;
+        }
+    }
+    let threshold = BRIGHT_THRESHOLD * total / (4.0 * PI);
+    let block = (w / BRIGHT_GRID_WIDTH).max(1);
+    let blocks_x = w.div_ceil(block);
+    let mut blocks: Vec<(u32, Block)> = Vec::new();
+    let mut slots: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
+    for y in 0..h {
+        let dw = pixel_solid_angle(y, w, h);
+        for x in 0..w {
+            let index = (y * w + x) as usize;
+            let p = map.pixels[index];
+            let y_lum = luminance(p);
+            // Written so that a NaN pixel (load replaces them) or a zero threshold is not bright.
+            if !(threshold > 0.0 && y_lum > threshold) {
+                continue;
+            }
+            let keep = threshold / y_lum;
+            let kept = p.map(|c| (f64::from(c) * keep) as f32);
+            let excess: [f64; 3] =
+                std::array::from_fn(|c| (f64::from(p[c]) - f64::from(kept[c])) * dw);
+            let id = (y / block) * blocks_x + x / block;
+            let slot = *slots.entry(id).or_insert_with(|| {
+                blocks.push((
+                    id,
+                    Block {
+                        pixels: Vec::new(),
+                        irradiance: [0.0; 3],
+                        centroid: DVec3::ZERO,
+                        weight: 0.0,
+                    },
+                ));
+                blocks.len() - 1
+            });
+            let b = &mut blocks[slot].1;
+            let weight = (y_lum - threshold) * dw;
+            b.pixels.push((index, kept));
+            b.centroid += weight * pixel_direction(x, y, w, h);
+            b.weight += weight;
+            for (sum, e) in b.irradiance.iter_mut().zip(excess) {
+                *sum += e;
+            }
+        }
+    }
+    // The brightest blocks first; equal weights in map order, so the split is deterministic.
+    blocks.sort_by(|a, b| b.1.weight.total_cmp(&a.1.weight).then(a.0.cmp(&b.0)));
+    blocks.truncate(MAX_ENV_LIGHTS);
+    let mut residual = map.clone();
+    let lights = blocks
+        .into_iter()
+        .map(|(_, b)| {
+            for (index, kept) in b.pixels {
+                residual.pixels[index] = kept;
+            }
+            BrightLight {
+                direction: b.centroid.normalize_or_zero(),
+                irradiance: b.irradiance,
+            }
+        })
+        .collect();
+    BrightSplit { residual, lights }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A grey map with a 3 × 2-pixel lamp 1000× brighter.
+    fn lamp_map() -> Equirect {
+        let mut map = Equirect::constant(64, 32, [0.5, 0.5, 0.5]);
+        for y in 10..12 {
+            for x in 20..23 {
+                map.pixels[y * 64 + x] = [500.0, 400.0, 300.0];
+            }
+        }
+        map
+    }
+
+    #[test]
+    fn residual_plus_lights_is_the_map() {
+        let map = lamp_map();
+        let split = split_bright(&map);
+        assert_eq!(
+            split.lights.len(),
+            6,
+            "one light per bright pixel at this width"
+        );
+        // Energy of the bright pixels = what the residual keeps of them + the lights.
+        let mut original = [0.0; 3];
+        let mut kept = [0.0; 3];
+        for y in 10..12u32 {
+            let dw = pixel_solid_angle(y, 64, 32);
+            for x in 20..23u32 {
+                let i = (y * 64 + x) as usize;
+                for c in 0..3 {
+                    original[c] += f64::from(map.pixels[i][c]) * dw;
+                    kept[c] += f64::from(split.residual.pixels[i][c]) * dw;
+                }
+            }
+        }
+        for c in 0..3 {
+            let lights: f64 = split.lights.iter().map(|l| l.irradiance[c]).sum();
+            assert!((kept[c] + lights - original[c]).abs() <= 1e-6 * original[c]);
+        }
+        // The rest of the map is untouched, and the lamp keeps its colour at the threshold.
+        assert_eq!(split.residual.pixels[0], map.pixels[0]);
+        let kept = split.residual.pixels[10 * 64 + 20];
+        assert!((kept[0] / kept[2] - 500.0 / 300.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_constant_map_has_no_lights() {
+        let map = Equirect::constant(64, 32, [2.0, 1.0, 0.5]);
+        let split = split_bright(&map);
+        assert!(split.lights.is_empty());
+        assert_eq!(split.residual, map);
+    }
+
+    #[test]
+    fn lights_turn_with_the_environment() {
+        let split = split_bright(&lamp_map());
+        let light = EnvironmentLight::new(2.0, 90.0);
+        let world = split.lights_in_world(light);
+        for (a, b) in split.lights.iter().zip(&world) {
+            // The world direction seen through the environment's rotation is the map's.
+            assert!((world_to_environment(b.direction, 90.0) - a.direction).length() < 1e-12);
+            assert_eq!(b.irradiance, a.irradiance.map(|e| 2.0 * e));
+        }
+    }
+
+    #[test]
+    fn at_most_max_env_lights_and_the_brightest_first() {
+        // 40 separate bright pixels of rising brightness: the 32 brightest are kept.
+        let mut map = Equirect::constant(256, 128, [0.1; 3]);
+        for k in 0..40u32 {
+            let i = (64 * 256 + k * 5) as usize;
+            map.pixels[i] = [100.0 + k as f32; 3];
+        }
+        let split = split_bright(&map);
+        assert_eq!(split.lights.len(), MAX_ENV_LIGHTS);
+        let first = split.lights[0].irradiance[0];
+        assert!(split.lights.iter().all(|l| l.irradiance[0] <= first));
+        // The dimmest eight stay in the residual unclamped.
+        assert_eq!(split.residual.pixels[64 * 256], [100.0; 3]);
+    }
+}
