@@ -146,26 +146,42 @@ fn shader_matches_its_cpu_twin() {
         residual: GpuEnvironment::upload(&gpu, &residual).unwrap(),
         lights: lights.clone(),
     });
-    let fresnel = FresnelTable::dielectric(1.5, 0.0045).unwrap();
     let pairs = test_pairs();
     for m in [0.02, 0.05, 0.2, 0.5] {
         let p = params(m);
-        let got = brdf_environment_specular_gpu(&gpu, &on_gpu, &p, &fresnel, &pairs).unwrap();
-        let albedo = albedo_knots(&p, &fresnel);
-        let mut worst: f64 = 0.0;
-        for (pair, got) in pairs.iter().zip(&got) {
-            let (n, v) = (pair[0].normalize(), pair[1].normalize());
-            let material = (&p, &fresnel, &albedo[..]);
-            let want = brdf_specular((&residual, &lights), BRDF_SAMPLES, material, n, v);
-            for c in 0..3 {
-                let scale = want[c].abs().max(1e-6);
-                worst = worst.max((f64::from(got[c]) - want[c]).abs() / scale);
-            }
-        }
+        let worst = worst_gpu_vs_twin(&gpu, &on_gpu, (&residual, &lights), &p, &pairs);
         println!("m {m}: worst relative GPU vs twin {worst:.2e}");
         assert!(worst <= 1e-4, "m {m}: {worst}");
     }
     crate::common::assert_no_validation_messages(&gpu);
+}
+
+/// The shader's `brdf` specular term (compute evaluator, `env` as a draw reads it) against the
+/// twin on `twin` (the residual's CPU layers and the lights), worst relative difference over the
+/// pairs and channels (a floor of 1e-6 for channels near 0).
+fn worst_gpu_vs_twin(
+    gpu: &shikki::gpu::GpuContext,
+    env: &GpuEnvironment,
+    twin: (
+        &shikki::environment::PrefilteredEnvironment,
+        &[shikki::environment::bright::BrightLight],
+    ),
+    p: &BrdfParams,
+    pairs: &[[DVec3; 2]],
+) -> f64 {
+    let fresnel = FresnelTable::dielectric(1.5, 0.0045).unwrap();
+    let got = brdf_environment_specular_gpu(gpu, env, p, &fresnel, pairs).unwrap();
+    let albedo = albedo_knots(p, &fresnel);
+    let mut worst: f64 = 0.0;
+    for (pair, got) in pairs.iter().zip(&got) {
+        let (n, v) = (pair[0].normalize(), pair[1].normalize());
+        let want = brdf_specular(twin, BRDF_SAMPLES, (p, &fresnel, &albedo), n, v);
+        for c in 0..3 {
+            let scale = want[c].abs().max(1e-6);
+            worst = worst.max((f64::from(got[c]) - want[c]).abs() / scale);
+        }
+    }
+    worst
 }
 
 /// A sky-and-ground map (radiance 0.2–1) with a disc of radius 1° at 35° elevation, 1000× brighter
@@ -334,23 +350,12 @@ fn the_preparer_attaches_the_split_the_shader_reads() {
     let full = prefilter_cpu(&source, &prefilter, light).unwrap();
     let on_gpu = GpuEnvironment::upload(&gpu, &full).unwrap();
     on_gpu.attach_bright(bright);
-    let fresnel = FresnelTable::dielectric(1.5, 0.0045).unwrap();
+    let lights = split.lights_in_world(light);
     let pairs = test_pairs();
     for m in [0.05, 0.5] {
         let p = params(m);
-        let got = brdf_environment_specular_gpu(&gpu, &on_gpu, &p, &fresnel, &pairs).unwrap();
-        let albedo = albedo_knots(&p, &fresnel);
-        let lights = split.lights_in_world(light);
-        let mut worst: f64 = 0.0;
-        for (pair, got) in pairs.iter().zip(&got) {
-            let (n, v) = (pair[0].normalize(), pair[1].normalize());
-            let material = (&p, &fresnel, &albedo[..]);
-            let want = brdf_specular((&residual, &lights), BRDF_SAMPLES, material, n, v);
-            for c in 0..3 {
-                let scale = want[c].abs().max(1e-6);
-                worst = worst.max((f64::from(got[c]) - want[c]).abs() / scale);
-            }
-        }
+        let twin = (&residual, &lights[..]);
+        let worst = worst_gpu_vs_twin(&gpu, &on_gpu, twin, &p, &pairs);
         println!("m {m}: worst relative, prepared split vs twin {worst:.2e}");
         assert!(worst <= 2e-3, "m {m}: {worst}");
     }
