@@ -2,10 +2,13 @@
 // quadrature. The CPU twin is src/environment/brdf_quadrature.rs: change both together, formula by
 // formula.
 //
-// ENV_SAMPLES half vectors from a Hammersley set in the Beckmann lobe, in a frame whose first axis
-// lies in the plane of incidence; each reflected direction s weighs F(acos V·H)·G·(V·H)/(nv·nh)
-// and reads the layers at the β whose lobe covers its share 1/(ENV_SAMPLES·pdf(s)) of the sphere
-// (filtered importance sampling). The lookups are bilinear by hand from the layers' texels
+// Two quadratures of the lookups, picked (or blended) by the material's m: for a narrow lobe
+// (m ≤ 0.2) a lattice of nodes on the plane of incidence, each read at the blur that gives the
+// lobe's width across the plane (`specular_lattice`: one lookup face-on, up to 33 at grazing);
+// for a wide one (m ≥ 0.3) ENV_SAMPLES half vectors from a Hammersley set in the Beckmann lobe,
+// in a frame whose first axis lies in the plane of incidence; each reflected direction s weighs
+// F(acos V·H)·G·(V·H)/(nv·nh) and reads the layers at the β whose lobe covers its share
+// 1/(ENV_SAMPLES·pdf(s)) of the sphere (filtered importance sampling, `specular_fis`). The lookups are bilinear by hand from the layers' texels
 // (`env_layer_texels`), with one seam rule written out here and in the twin: a tap beyond its face
 // reads the texel holding the tap's direction on the face that direction selects. The sampler's
 // own cube filtering leaves the edges and corners to the implementation.
@@ -66,17 +69,28 @@ vec3 layer_texel(int k, vec3 d) {
     return texelFetch(env_layer_texels, first + (face * size + ij.y) * size + ij.x).rgb;
 }
 
-// Layer k at d, bilinear over the four texel centres around d; each tap is looked up by its
-// direction (for a tap inside the face that is the texel itself).
-vec3 layer_bilinear(int k, vec3 d) {
-    int face;
-    vec2 st;
-    vec3 axis, s_dir, t_dir;
-    select_face(d, face, st, axis, s_dir, t_dir);
+// Layer k at the direction d that select_face put at (face, st), bilinear over the four texel
+// centres around it; each tap is looked up by its direction (for a tap inside the face that is
+// the texel itself).
+vec3 layer_bilinear(int k, int face, vec2 st, vec3 axis, vec3 s_dir, vec3 t_dir) {
     float size = float(frame.layer_face_size[k / 4][k % 4]);
     vec2 xy = (st + 1.0) * 0.5 * size - 0.5;
     vec2 xy0 = floor(xy);
     vec2 f = xy - xy0;
+    ivec2 ij = ivec2(xy0);
+    int isize = int(size);
+    if (all(greaterThanEqual(ij, ivec2(0))) && all(lessThan(ij + 1, ivec2(isize)))) {
+        // All four taps inside the face: each is the texel itself, read without a face selection
+        // per tap (the same texels the rule below finds).
+        int row = frame.layer_first_texel[k / 4][k % 4] + (face * isize + ij.y) * isize + ij.x;
+        vec3 a = texelFetch(env_layer_texels, row).rgb;
+        vec3 b = texelFetch(env_layer_texels, row + 1).rgb;
+        vec3 c = texelFetch(env_layer_texels, row + isize).rgb;
+        vec3 e = texelFetch(env_layer_texels, row + isize + 1).rgb;
+        vec3 top = a + (b - a) * f.x;
+        vec3 bottom = c + (e - c) * f.x;
+        return top + (bottom - top) * f.y;
+    }
     // Face coordinates of the tap centres x0, x0 + 1 (and y0, y0 + 1).
     vec2 c0 = 2.0 * (xy0 + 0.5) / size - 1.0;
     vec2 c1 = 2.0 * (xy0 + 1.5) / size - 1.0;
@@ -94,11 +108,16 @@ vec3 layered_radiance(vec3 d, float beta) {
     int k0;
     float t;
     layer_pair(beta, k0, t);
-    vec3 lo = layer_bilinear(k0, d);
+    // Both layers see d on the same face at the same (s, t).
+    int face;
+    vec2 st;
+    vec3 axis, s_dir, t_dir;
+    select_face(d, face, st, axis, s_dir, t_dir);
+    vec3 lo = layer_bilinear(k0, face, st, axis, s_dir, t_dir);
     if (t == 0.0) {
         return lo;
     }
-    vec3 hi = layer_bilinear(min(k0 + 1, ENV_LAYER_COUNT - 1), d);
+    vec3 hi = layer_bilinear(min(k0 + 1, ENV_LAYER_COUNT - 1), face, st, axis, s_dir, t_dir);
     return lo + (hi - lo) * t;
 }
 
@@ -118,8 +137,17 @@ vec3 albedo_at(int first, float nv) {
 // `bright_specular` in the twin): Σ f_spec·E·(N·l) = Σ F·D·G·E/(4·nv), exact per light.
 vec3 bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
     vec3 sum = vec3(0.0);
+    // Reflection about H is reflection about N followed by a turn of 2·∠(N, H), so a light more
+    // than 2·θ_max from the mirror direction R has ∠(N, H) > θ_max, tan²θ_max = 50 m²: the test
+    // below would skip it, and one dot product does it first.
+    vec3 r = 2.0 * nv * n - v;
+    float cull_angle = 2.0 * atan(7.0710678 * p.beckmann_m);
+    float cull_cos = cull_angle < PI ? cos(cull_angle) : -2.0;
     for (int i = 0; i < frame.environment.z; ++i) {
         vec3 l = frame.env_light_direction[i].xyz;
+        if (dot(r, l) < cull_cos) {
+            continue;
+        }
         float nl = dot(n, l);
         vec3 half_sum = v + l;
         float half_len = length(half_sum);
@@ -143,16 +171,74 @@ vec3 bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
     return sum;
 }
 
-// ∫ f_spec(N, V, s)·L(s)·(N·s) dω_s at a surface point (unit n, v; nv = N·V > 0): the bright
-// lights, plus the weighted mean of the residual's lookups times the directional albedo A(nv),
-// Σ w·L / Σ w · A(nv), exact in a white furnace at every nv.
-vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
+// The frame of the plane of incidence: the tangent towards V's projection (any axis at normal
+// incidence, where the pattern's orientation does not matter), and N × tangent.
+void incidence_frame(vec3 n, vec3 v, float nv, out vec3 tangent, out vec3 bitangent) {
     vec3 along = v - nv * n;
     float along2 = dot(along, along);
-    // Any axis at normal incidence: there the pattern's orientation does not matter.
     vec3 other = abs(n.x) < 0.5 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
-    vec3 tangent = along2 > 1e-12 ? along * inversesqrt(along2) : normalize(cross(n, other));
-    vec3 bitangent = cross(n, tangent);
+    tangent = along2 > 1e-12 ? along * inversesqrt(along2) : normalize(cross(n, other));
+    bitangent = cross(n, tangent);
+}
+
+// The lattice's share of the lookups for roughness m: 1 up to m_lo, 0 from m_hi (twin:
+// `lattice_share`).
+float lattice_share(float m) {
+    vec2 band = frame.env_lattice_band.xy;
+    return clamp((band.y - m) / (band.y - band.x), 0.0, 1.0);
+}
+
+// 1 inside the reach, a smoothstep to 0 over its last `taper` share (twin: `lattice_taper`).
+float lattice_taper(float x) {
+    float t = clamp((1.0 - x) / frame.env_lattice.z, 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+// The narrow-lobe quadrature (twin: `specular_lattice`, whose doc derives it): nodes on the plane
+// of incidence at Beckmann slopes i·step, each read at the blur β that supplies the lobe's width
+// across the plane, weighted by the Gaussian of the rest of the in-plane spread.
+vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv) {
+    vec3 tangent, bitangent;
+    incidence_frame(n, v, nv, tangent, bitangent);
+    float spacing = frame.env_lattice.x;
+    float max_half = frame.env_lattice.w;
+    float sigma = p.beckmann_m * 0.70710678;
+    float sigma_p = sigma * sqrt(max(1.0 - nv * nv, 0.0));
+    float reach = frame.env_lattice.y * sigma_p;
+    float step = max(spacing * nv * sigma, reach / max_half);
+    float beta = max(2.0 * nv * sigma, 2.0 * step / spacing);
+    int half_count = int(min(ceil(reach / step), max_half));
+    vec3 sum = vec3(0.0);
+    vec3 weights = vec3(0.0);
+    for (int i = -half_count; i <= half_count; ++i) {
+        float slope = float(i) * step;
+        float gauss = sigma_p > 0.0
+            ? exp(-0.5 * (slope / sigma_p) * (slope / sigma_p)) * lattice_taper(abs(slope) / reach)
+            : 1.0;
+        vec3 h = normalize(tangent * slope + n);
+        float cos_h = dot(n, h);
+        float vh = dot(v, h);
+        vec3 s = 2.0 * vh * h - v;
+        float nl = dot(n, s);
+        if (gauss > 0.0 && vh > 0.0 && nl > 0.0) {
+            float g = cook_torrance_g(cos_h, nv, nl, vh);
+            vec3 f = fresnel_table(angle_deg_of_cos(min(vh, 1.0)), p.fresnel_first, p.fresnel_count);
+            vec3 weight = f * (gauss * g * vh / (nv * cos_h));
+            sum += weight * layered_radiance(s, beta);
+            weights += weight;
+        }
+    }
+    vec3 a = albedo_at(p.albedo_first, nv);
+    return vec3(weights.r > 0.0 ? sum.r / weights.r * a.r : 0.0,
+                weights.g > 0.0 ? sum.g / weights.g * a.g : 0.0,
+                weights.b > 0.0 ? sum.b / weights.b * a.b : 0.0);
+}
+
+// Filtered importance sampling (twin: `specular_quadrature`): the weighted mean of the lookups
+// times the directional albedo A(nv), Σ w·L / Σ w · A(nv), exact in a white furnace at every nv.
+vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv) {
+    vec3 tangent, bitangent;
+    incidence_frame(n, v, nv, tangent, bitangent);
     float m2 = p.beckmann_m * p.beckmann_m;
     vec3 sum = vec3(0.0);
     vec3 weights = vec3(0.0);
@@ -182,9 +268,23 @@ vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
         }
     }
     vec3 a = albedo_at(p.albedo_first, nv);
-    vec3 lookups = vec3(weights.r > 0.0 ? sum.r / weights.r * a.r : 0.0,
-                        weights.g > 0.0 ? sum.g / weights.g * a.g : 0.0,
-                        weights.b > 0.0 ? sum.b / weights.b * a.b : 0.0);
+    return vec3(weights.r > 0.0 ? sum.r / weights.r * a.r : 0.0,
+                weights.g > 0.0 ? sum.g / weights.g * a.g : 0.0,
+                weights.b > 0.0 ? sum.b / weights.b * a.b : 0.0);
+}
+
+// ∫ f_spec(N, V, s)·L(s)·(N·s) dω_s at a surface point (unit n, v; nv = N·V > 0): the bright
+// lights, plus the residual's lookups by the lattice, filtered importance sampling, or both
+// blended, as `lattice_share` says for the material (twin: `brdf_specular`).
+vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
+    float share = lattice_share(p.beckmann_m);
+    vec3 lookups = vec3(0.0);
+    if (share > 0.0) {
+        lookups += share * specular_lattice(p, n, v, nv);
+    }
+    if (share < 1.0) {
+        lookups += (1.0 - share) * specular_fis(p, n, v, nv);
+    }
     return lookups + bright_specular(p, n, v, nv);
 }
 

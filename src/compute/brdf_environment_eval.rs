@@ -66,6 +66,7 @@ pub fn brdf_environment_specular_gpu(
     frame.environment = [1, residual.layers.len() as i32, 0, 0];
     frame.set_environment_layers(&residual.betas, &residual.layer_faces());
     frame.set_bright_lights(lights);
+    frame.set_brdf_quadrature();
     let mut knots = fresnel_knots(fresnel);
     let material = ObjectMaterial {
         albedo_first: knots.len() as f32,

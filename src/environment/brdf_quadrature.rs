@@ -111,15 +111,8 @@ pub fn specular_quadrature(
         return [0.0; 3];
     }
     // The frame's first axis lies in the plane of incidence, so the pattern is symmetric about
-    // it and moves continuously with V (any axis at normal incidence).
-    let along = v - nv * n;
-    let other = if n.x.abs() < 0.5 { DVec3::X } else { DVec3::Y };
-    let tangent = if along.length_squared() > 1e-12 {
-        along.normalize()
-    } else {
-        n.cross(other).normalize()
-    };
-    let bitangent = n.cross(tangent);
+    // it and moves continuously with V.
+    let (tangent, bitangent) = incidence_frame(n, v, nv);
     let m2 = brdf.beckmann_m * brdf.beckmann_m;
     let count = samples.max(1);
     let mut sum = [0.0; 3];
@@ -158,6 +151,104 @@ pub fn specular_quadrature(
     })
 }
 
+/// The plane-of-incidence lattice (`specular_lattice`): node spacing in units of the lookup
+/// blur, reach in standard deviations of the nodes' distribution, most nodes on each side of the
+/// mirror direction; and the roughness band over which the `brdf` model passes from the lattice
+/// (m ≤ `LATTICE_M_LO`) to filtered importance sampling (m ≥ `LATTICE_M_HI`), blending linearly
+/// in m between. Measured in BENCHMARKS.md ("The `brdf` environment model"); packed into
+/// `Frame::env_lattice` for the shaders.
+pub const LATTICE_SPACING: f64 = 2.0;
+pub const LATTICE_REACH: f64 = 2.5;
+pub const LATTICE_MAX_HALF: u32 = 16;
+pub const LATTICE_M_LO: f64 = 0.2;
+pub const LATTICE_M_HI: f64 = 0.3;
+/// The share of the reach over which the node weights fall to 0 ([`lattice_taper`]).
+pub const LATTICE_TAPER: f64 = 0.2;
+
+/// The lattice's share of the `brdf` model's lookups for roughness m (1 up to `LATTICE_M_LO`,
+/// 0 from `LATTICE_M_HI`), the rest going to filtered importance sampling.
+pub fn lattice_share(m: f64) -> f64 {
+    ((LATTICE_M_HI - m) / (LATTICE_M_HI - LATTICE_M_LO)).clamp(0.0, 1.0)
+}
+
+/// The node weights' taper over the last `LATTICE_TAPER` of the reach (x = |p| / reach): 1 inside, a
+/// smoothstep down to 0 at the reach, so a node that enters the lattice as nv changes enters with
+/// weight 0 and the estimate stays continuous in nv.
+pub fn lattice_taper(x: f64) -> f64 {
+    let t = ((1.0 - x) / LATTICE_TAPER).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// The specular part of the `brdf` model for a narrow lobe, by a lattice along the plane of
+/// incidence. The Beckmann slopes are Gaussian, σ = m/√2 per axis; mapped to reflected
+/// directions, the lobe is 2·nv·σ wide across the plane and 2·σ along it. Each node reads the
+/// layers at β = 2·nv·σ, which supplies the width across the plane and a share of the width
+/// along it; the nodes lie on the plane of incidence at slopes p spaced `LATTICE_SPACING`·β/2
+/// apart, weighted by the Gaussian of the rest of the in-plane variance, σ_p² = σ²·(1 − nv²),
+/// times F·G·(V·H)/(nv·nh) (`lattice_taper` at the reach). At normal incidence that is one
+/// lookup; towards grazing, more (at most 2·`LATTICE_MAX_HALF` + 1, the spacing and blur growing
+/// past that). Normalised by A(nv) like [`specular_quadrature`].
+pub fn specular_lattice(
+    env: &PrefilteredEnvironment,
+    (brdf, fresnel, albedo): (&BrdfParams, &FresnelTable, &[[f32; 4]]),
+    n: DVec3,
+    v: DVec3,
+) -> [f64; 3] {
+    let nv = n.dot(v);
+    if nv.is_nan() || nv <= 0.0 {
+        return [0.0; 3];
+    }
+    let (tangent, _) = incidence_frame(n, v, nv);
+    let sigma = brdf.beckmann_m / std::f64::consts::SQRT_2;
+    let sigma_p = sigma * (1.0 - nv * nv).max(0.0).sqrt();
+    let reach = LATTICE_REACH * sigma_p;
+    let step = (LATTICE_SPACING * nv * sigma).max(reach / f64::from(LATTICE_MAX_HALF));
+    let beta = (2.0 * nv * sigma).max(2.0 * step / LATTICE_SPACING);
+    let half = (reach / step).ceil().min(f64::from(LATTICE_MAX_HALF)) as i32;
+    let mut sum = [0.0; 3];
+    let mut weights = [0.0; 3];
+    for i in -half..=half {
+        let slope = f64::from(i) * step;
+        let gauss = match sigma_p > 0.0 {
+            true => (-0.5 * (slope / sigma_p).powi(2)).exp() * lattice_taper(slope.abs() / reach),
+            false => 1.0,
+        };
+        let h = (tangent * slope + n).normalize();
+        let cos_h = n.dot(h);
+        let vh = v.dot(h);
+        let s = 2.0 * vh * h - v;
+        let nl = n.dot(s);
+        if gauss > 0.0 && vh > 0.0 && nl > 0.0 {
+            let g = cook_torrance_g(cos_h, nv, nl, vh);
+            let f = fresnel.eval(vh.min(1.0).acos().to_degrees());
+            let weight = gauss * g * vh / (nv * cos_h);
+            let radiance = layered_radiance(env, s, beta);
+            for c in 0..3 {
+                sum[c] += f[c] * weight * radiance[c];
+                weights[c] += f[c] * weight;
+            }
+        }
+    }
+    let a = albedo_at(albedo, nv);
+    std::array::from_fn(|c| match weights[c] > 0.0 {
+        true => sum[c] / weights[c] * a[c],
+        false => 0.0,
+    })
+}
+
+/// The frame of the plane of incidence: the tangent towards V's projection (any axis at normal
+/// incidence, where the pattern's orientation does not matter), and N × tangent.
+fn incidence_frame(n: DVec3, v: DVec3, nv: f64) -> (DVec3, DVec3) {
+    let along = v - nv * n;
+    let other = if n.x.abs() < 0.5 { DVec3::X } else { DVec3::Y };
+    let tangent = if along.length_squared() > 1e-12 {
+        along.normalize()
+    } else {
+        n.cross(other).normalize()
+    };
+    (tangent, n.cross(tangent))
+}
+
 /// The map's bright lights (bright.rs) through the specular lobe, Σ f_spec·E·(N·l): the twin of
 /// brdf_environment.glsl's `bright_specular`.
 pub fn bright_specular(
@@ -179,8 +270,9 @@ pub fn bright_specular(
 }
 
 /// The `brdf` model's specular term as the renderer computes it: the bright lights plus the
-/// quadrature over the residual's layers (`sources` from the map's bright split; a map without
-/// bright parts is its own residual, with no lights).
+/// lookups of the residual's layers (`sources` from the map's bright split; a map without bright
+/// parts is its own residual, with no lights) by the lattice, filtered importance sampling with
+/// `samples` samples, or both blended, as [`lattice_share`] says for the material's m.
 pub fn brdf_specular(
     (residual, lights): (&PrefilteredEnvironment, &[BrightLight]),
     samples: u32,
@@ -188,7 +280,16 @@ pub fn brdf_specular(
     n: DVec3,
     v: DVec3,
 ) -> [f64; 3] {
-    let lookups = specular_quadrature(residual, samples, material, n, v);
+    let share = lattice_share(material.0.beckmann_m);
+    let lattice = match share > 0.0 {
+        true => specular_lattice(residual, material, n, v),
+        false => [0.0; 3],
+    };
+    let fis = match share < 1.0 {
+        true => specular_quadrature(residual, samples, material, n, v),
+        false => [0.0; 3],
+    };
+    let lookups: [f64; 3] = std::array::from_fn(|c| share * lattice[c] + (1.0 - share) * fis[c]);
     let bright = bright_specular(lights, material.0, material.1, n, v);
     std::array::from_fn(|c| lookups[c] + bright[c])
 }

@@ -22,7 +22,7 @@ pub const BRIGHT_THRESHOLD: f64 = 16.0;
 
 /// Maps wider than this are split in blocks of `width / BRIGHT_GRID_WIDTH` pixels square, so a sun
 /// takes as few lights at 8k as at 1k.
-const BRIGHT_GRID_WIDTH: u32 = 1024;
+const BRIGHT_GRID_WIDTH: u32 = 512;
 
 /// A bright block as a directional light: towards it, and its irradiance at normal incidence.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -228,7 +228,7 @@ mod tests {
 
     #[test]
     fn at_most_max_env_lights_and_the_brightest_first() {
-        // 40 separate bright pixels of rising brightness: the 32 brightest are kept.
+        // 40 separate bright pixels of rising brightness: the MAX_ENV_LIGHTS brightest are kept.
         let mut map = Equirect::constant(256, 128, [0.1; 3]);
         for k in 0..40u32 {
             let i = (64 * 256 + k * 5) as usize;
@@ -238,7 +238,7 @@ mod tests {
         assert_eq!(split.lights.len(), MAX_ENV_LIGHTS);
         let first = split.lights[0].irradiance[0];
         assert!(split.lights.iter().all(|l| l.irradiance[0] <= first));
-        // The dimmest eight stay in the residual unclamped.
+        // The dimmest stay in the residual unclamped.
         assert_eq!(split.residual.pixels[64 * 256], [100.0; 3]);
     }
 }

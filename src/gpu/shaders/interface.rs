@@ -19,7 +19,7 @@ shader_interface! {
         MAX_ENV_LAYERS: usize = 16;
         /// The most bright parts of a map the `brdf` model takes out as directional lights
         /// (environment/bright.rs; `Frame::env_light_direction`).
-        MAX_ENV_LIGHTS: usize = 32;
+        MAX_ENV_LIGHTS: usize = 16;
         /// Knots of the specular directional albedo A(nv) the `brdf` model normalises by, at
         /// nv = (k/(ALBEDO_KNOTS − 1))² (environment/brdf_quadrature.rs `albedo_knots`).
         ALBEDO_KNOTS: usize = 65;
@@ -190,6 +190,11 @@ shader_interface! {
             /// the light, and rgb its irradiance.
             env_light_direction: [vec4; MAX_ENV_LIGHTS],
             env_light_irradiance: [vec4; MAX_ENV_LIGHTS],
+            /// The `brdf` model's plane-of-incidence lattice (environment/brdf_quadrature.rs
+            /// `LATTICE_*`): spacing, reach, taper, most nodes on each side; and the roughness
+            /// band (m_lo, m_hi) over which it hands over to filtered importance sampling.
+            env_lattice: vec4,
+            env_lattice_band: vec4,
         }
 
         /// Step 1's push constants (equirect_to_cube*.comp).

@@ -116,6 +116,19 @@ impl Frame {
         }
     }
 
+    /// Packs the `brdf` model's quadrature constants (the lattice's, from brdf_quadrature.rs);
+    /// also used by the compute evaluator.
+    pub(crate) fn set_brdf_quadrature(&mut self) {
+        use crate::environment::brdf_quadrature as q;
+        self.env_lattice = [
+            q::LATTICE_SPACING as f32,
+            q::LATTICE_REACH as f32,
+            q::LATTICE_TAPER as f32,
+            q::LATTICE_MAX_HALF as f32,
+        ];
+        self.env_lattice_band = [q::LATTICE_M_LO as f32, q::LATTICE_M_HI as f32, 0.0, 0.0];
+    }
+
     /// Packs the `brdf` model's bright lights (at most `MAX_ENV_LIGHTS`, which
     /// `bright::split_bright` never exceeds); also used by the compute evaluator.
     pub(crate) fn set_bright_lights(&mut self, lights: &[BrightLight]) {
@@ -163,6 +176,7 @@ impl Frame {
         };
         frame.set_environment_layers(&environment.layer_betas, &environment.layer_faces);
         frame.set_bright_lights(&environment.bright_lights);
+        frame.set_brdf_quadrature();
         for (i, light) in lights.iter().take(MAX_LIGHTS).enumerate() {
             let (vector, color) = match *light {
                 Light::Directional {
