@@ -171,6 +171,32 @@ vec3 bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
     return sum;
 }
 
+// One lookup of either quadrature: the reflection s of v about the half vector h (vh = V·H > 0),
+// read at β and weighted by scale·F(acos V·H)·G·(V·H)/(nv·nh); nothing where s is below the
+// surface (twin: `LookupSums::add`).
+void add_lookup(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, float scale,
+    float beta, inout vec3 sum, inout vec3 weights) {
+    vec3 s = 2.0 * vh * h - v;
+    float nl = dot(n, s);
+    if (nl <= 0.0) {
+        return;
+    }
+    float cos_h = dot(n, h);
+    float g = cook_torrance_g(cos_h, nv, nl, vh);
+    vec3 f = fresnel_table(angle_deg_of_cos(min(vh, 1.0)), p.fresnel_first, p.fresnel_count);
+    vec3 weight = f * (scale * g * vh / (nv * cos_h));
+    sum += weight * layered_radiance(s, beta);
+    weights += weight;
+}
+
+// Σ w·L / Σ w · A(nv) per channel: exact in a white furnace (twin: `LookupSums::normalized`).
+vec3 normalized_lookups(LacquerParams p, float nv, vec3 sum, vec3 weights) {
+    vec3 a = albedo_at(p.albedo_first, nv);
+    return vec3(weights.r > 0.0 ? sum.r / weights.r * a.r : 0.0,
+                weights.g > 0.0 ? sum.g / weights.g * a.g : 0.0,
+                weights.b > 0.0 ? sum.b / weights.b * a.b : 0.0);
+}
+
 // The frame of the plane of incidence: the tangent towards V's projection (any axis at normal
 // incidence, where the pattern's orientation does not matter), and N × tangent.
 void incidence_frame(vec3 n, vec3 v, float nv, out vec3 tangent, out vec3 bitangent) {
@@ -216,22 +242,12 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv) {
             ? exp(-0.5 * (slope / sigma_p) * (slope / sigma_p)) * lattice_taper(abs(slope) / reach)
             : 1.0;
         vec3 h = normalize(tangent * slope + n);
-        float cos_h = dot(n, h);
         float vh = dot(v, h);
-        vec3 s = 2.0 * vh * h - v;
-        float nl = dot(n, s);
-        if (gauss > 0.0 && vh > 0.0 && nl > 0.0) {
-            float g = cook_torrance_g(cos_h, nv, nl, vh);
-            vec3 f = fresnel_table(angle_deg_of_cos(min(vh, 1.0)), p.fresnel_first, p.fresnel_count);
-            vec3 weight = f * (gauss * g * vh / (nv * cos_h));
-            sum += weight * layered_radiance(s, beta);
-            weights += weight;
+        if (gauss > 0.0 && vh > 0.0) {
+            add_lookup(p, n, v, nv, h, vh, gauss, beta, sum, weights);
         }
     }
-    vec3 a = albedo_at(p.albedo_first, nv);
-    return vec3(weights.r > 0.0 ? sum.r / weights.r * a.r : 0.0,
-                weights.g > 0.0 ? sum.g / weights.g * a.g : 0.0,
-                weights.b > 0.0 ? sum.b / weights.b * a.b : 0.0);
+    return normalized_lookups(p, nv, sum, weights);
 }
 
 // Filtered importance sampling (twin: `specular_quadrature`): the weighted mean of the lookups
@@ -253,24 +269,15 @@ vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv) {
         float phi = 2.0 * PI * w;
         vec3 h = tangent * (sin_h * cos(phi)) + bitangent * (sin_h * sin(phi)) + n * cos_h;
         float vh = dot(v, h);
-        vec3 s = 2.0 * vh * h - v;
-        float nl = dot(n, s);
-        if (vh > 0.0 && nl > 0.0) {
-            float g = cook_torrance_g(cos_h, nv, nl, vh);
-            vec3 f = fresnel_table(angle_deg_of_cos(min(vh, 1.0)), p.fresnel_first, p.fresnel_count);
+        if (vh > 0.0) {
             // pdf(s) = D·cos θ_H/(4·V·H) with D = (1 − u)/(π m² cos⁴θ_H); the lookup's lobe
             // 2πβ² covers 1/(ENV_SAMPLES·pdf).
             float pdf = rest / (4.0 * PI * m2 * cos_h * cos_h * cos_h * vh);
             float beta = sqrt(1.0 / (2.0 * PI * float(ENV_SAMPLES) * pdf));
-            vec3 weight = f * (g * vh / (nv * cos_h));
-            sum += weight * layered_radiance(s, beta);
-            weights += weight;
+            add_lookup(p, n, v, nv, h, vh, 1.0, beta, sum, weights);
         }
     }
-    vec3 a = albedo_at(p.albedo_first, nv);
-    return vec3(weights.r > 0.0 ? sum.r / weights.r * a.r : 0.0,
-                weights.g > 0.0 ? sum.g / weights.g * a.g : 0.0,
-                weights.b > 0.0 ? sum.b / weights.b * a.b : 0.0);
+    return normalized_lookups(p, nv, sum, weights);
 }
 
 // ∫ f_spec(N, V, s)·L(s)·(N·s) dω_s at a surface point (unit n, v; nv = N·V > 0): the bright

@@ -115,8 +115,7 @@ pub fn specular_quadrature(
     let (tangent, bitangent) = incidence_frame(n, v, nv);
     let m2 = brdf.beckmann_m * brdf.beckmann_m;
     let count = samples.max(1);
-    let mut sum = [0.0; 3];
-    let mut weights = [0.0; 3];
+    let mut sums = LookupSums::default();
     for i in 0..count {
         let (u, w) = hammersley(i, count);
         // u = 1 − exp(−tan²θ_H/m²): the Beckmann lobe's distribution of D·cos θ_H.
@@ -126,29 +125,61 @@ pub fn specular_quadrature(
         let sin_h = tan2.sqrt() * cos_h;
         let (sin_phi, cos_phi) = (2.0 * PI * w).sin_cos();
         let h = tangent * (sin_h * cos_phi) + bitangent * (sin_h * sin_phi) + n * cos_h;
+        // pdf(s) = D·cos θ_H/(4·V·H) with D = (1 − u)/(π m² cos⁴θ_H); the lookup's lobe 2πβ²
+        // covers 1/(samples·pdf).
+        let beta = |vh: f64| {
+            let pdf = rest / (4.0 * PI * m2 * cos_h * cos_h * cos_h * vh);
+            (1.0 / (2.0 * PI * f64::from(count) * pdf)).sqrt()
+        };
+        sums.add(env, fresnel, (n, v, nv), h, 1.0, beta);
+    }
+    sums.normalized(albedo, nv)
+}
+
+/// A quadrature's weighted sums per channel: Σ w·Lpre(s, β) and Σ w.
+#[derive(Default)]
+struct LookupSums {
+    sum: [f64; 3],
+    weights: [f64; 3],
+}
+
+impl LookupSums {
+    /// One lookup: the reflection s of V about the half vector h, read at `beta(V·H)` and weighted
+    /// by scale·F(acos V·H)·G·(V·H)/(nv·nh); nothing where s or h is below the surface.
+    fn add(
+        &mut self,
+        env: &PrefilteredEnvironment,
+        fresnel: &FresnelTable,
+        (n, v, nv): (DVec3, DVec3, f64),
+        h: DVec3,
+        scale: f64,
+        beta: impl FnOnce(f64) -> f64,
+    ) {
+        let cos_h = n.dot(h);
         let vh = v.dot(h);
         let s = 2.0 * vh * h - v;
         let nl = n.dot(s);
-        if vh > 0.0 && nl > 0.0 {
-            let g = cook_torrance_g(cos_h, nv, nl, vh);
-            let f = fresnel.eval(vh.min(1.0).acos().to_degrees());
-            // pdf(s) = D·cos θ_H/(4·V·H) with D = (1 − u)/(π m² cos⁴θ_H); the lookup's lobe
-            // 2πβ² covers 1/(samples·pdf).
-            let pdf = rest / (4.0 * PI * m2 * cos_h * cos_h * cos_h * vh);
-            let beta = (1.0 / (2.0 * PI * f64::from(count) * pdf)).sqrt();
-            let weight = g * vh / (nv * cos_h);
-            let radiance = layered_radiance(env, s, beta);
-            for c in 0..3 {
-                sum[c] += f[c] * weight * radiance[c];
-                weights[c] += f[c] * weight;
-            }
+        if !(scale > 0.0 && vh > 0.0 && nl > 0.0) {
+            return;
+        }
+        let g = cook_torrance_g(cos_h, nv, nl, vh);
+        let f = fresnel.eval(vh.min(1.0).acos().to_degrees());
+        let weight = scale * g * vh / (nv * cos_h);
+        let radiance = layered_radiance(env, s, beta(vh));
+        for c in 0..3 {
+            self.sum[c] += f[c] * weight * radiance[c];
+            self.weights[c] += f[c] * weight;
         }
     }
-    let a = albedo_at(albedo, nv);
-    std::array::from_fn(|c| match weights[c] > 0.0 {
-        true => sum[c] / weights[c] * a[c],
-        false => 0.0,
-    })
+
+    /// Σ w·L / Σ w · A(nv) per channel: exact in a white furnace.
+    fn normalized(&self, albedo: &[[f32; 4]], nv: f64) -> [f64; 3] {
+        let a = albedo_at(albedo, nv);
+        std::array::from_fn(|c| match self.weights[c] > 0.0 {
+            true => self.sum[c] / self.weights[c] * a[c],
+            false => 0.0,
+        })
+    }
 }
 
 /// The plane-of-incidence lattice (`specular_lattice`): node spacing in units of the lookup
@@ -205,8 +236,7 @@ pub fn specular_lattice(
     let step = (LATTICE_SPACING * nv * sigma).max(reach / f64::from(LATTICE_MAX_HALF));
     let beta = (2.0 * nv * sigma).max(2.0 * step / LATTICE_SPACING);
     let half = (reach / step).ceil().min(f64::from(LATTICE_MAX_HALF)) as i32;
-    let mut sum = [0.0; 3];
-    let mut weights = [0.0; 3];
+    let mut sums = LookupSums::default();
     for i in -half..=half {
         let slope = f64::from(i) * step;
         let gauss = match sigma_p > 0.0 {
@@ -214,26 +244,9 @@ pub fn specular_lattice(
             false => 1.0,
         };
         let h = (tangent * slope + n).normalize();
-        let cos_h = n.dot(h);
-        let vh = v.dot(h);
-        let s = 2.0 * vh * h - v;
-        let nl = n.dot(s);
-        if gauss > 0.0 && vh > 0.0 && nl > 0.0 {
-            let g = cook_torrance_g(cos_h, nv, nl, vh);
-            let f = fresnel.eval(vh.min(1.0).acos().to_degrees());
-            let weight = gauss * g * vh / (nv * cos_h);
-            let radiance = layered_radiance(env, s, beta);
-            for c in 0..3 {
-                sum[c] += f[c] * weight * radiance[c];
-                weights[c] += f[c] * weight;
-            }
-        }
+        sums.add(env, fresnel, (n, v, nv), h, gauss, |_| beta);
     }
-    let a = albedo_at(albedo, nv);
-    std::array::from_fn(|c| match weights[c] > 0.0 {
-        true => sum[c] / weights[c] * a[c],
-        false => 0.0,
-    })
+    sums.normalized(albedo, nv)
 }
 
 /// The frame of the plane of incidence: the tangent towards V's projection (any axis at normal
