@@ -34,37 +34,88 @@ vec3 environment_light(LacquerParams p, vec3 view_blur, vec3 n, vec3 v, vec2 nv2
     return specular + f_diff * irradiance;
 }
 
+// Light i as it reaches `position`: towards it (l) and its irradiance there. False for a point
+// light at the position itself.
+bool incident_light(int i, vec3 position, out vec3 l, out vec3 irradiance) {
+    vec4 lv = frame.light_vector[i];
+    if (lv.w == 0.0) {
+        l = normalize(lv.xyz);
+        irradiance = frame.light_color[i].rgb;
+        return true;
+    }
+    vec3 to_light = lv.xyz - position;
+    float d2 = dot(to_light, to_light);
+    l = vec3(0.0, 0.0, 1.0);
+    irradiance = vec3(0.0);
+    if (d2 <= 0.0) {
+        return false;
+    }
+    l = to_light * inversesqrt(d2);
+    irradiance = frame.light_color[i].rgb / d2;
+    return true;
+}
+
+// Light i's f_r·E·(N·L) at the point, unshadowed (0 where it does not reach it).
+vec3 unshadowed_light(LacquerParams p, int i, vec3 position, vec3 n, vec3 v, vec2 nv2,
+    vec3 f_diff) {
+    vec3 l;
+    vec3 irradiance;
+    if (!incident_light(i, position, l, irradiance)) {
+        return vec3(0.0);
+    }
+    float nl = dot(n, l);
+    if (nl <= 0.0) {
+        return vec3(0.0);
+    }
+    return lacquer_brdf_view(p, n, v, l, nv2, f_diff) * irradiance * nl;
+}
+
+// The lights with visibility by one shadow ray (next-event estimation at a path's hit): light k
+// is chosen with probability w_k / W, w_k the sum of its unshadowed f_r·E·(N·L) over r, g, b, by
+// `choice` in [0, 1), and counts c_k·vis_k·W/w_k, which is the sum of all lights exactly where
+// none is shadowed. The twin is `oracle::light_between`'s `one_light`.
+vec3 one_light(LacquerParams p, vec3 position, vec3 n, vec3 v, vec2 nv2, vec3 f_diff,
+    RaySurface surface, float choice) {
+    float total = 0.0;
+    for (int i = 0; i < frame.light_count.x; ++i) {
+        vec3 c = unshadowed_light(p, i, position, n, v, nv2, f_diff);
+        total += c.r + c.g + c.b;
+    }
+    if (!(total > 0.0)) {
+        return vec3(0.0);
+    }
+    float target = choice * total;
+    float below = 0.0;
+    for (int i = 0; i < frame.light_count.x; ++i) {
+        vec3 c = unshadowed_light(p, i, position, n, v, nv2, f_diff);
+        float w = c.r + c.g + c.b;
+        below += w;
+        if (w > 0.0 && (target < below || i == frame.light_count.x - 1)) {
+            return c * (light_visibility(surface, frame.light_vector[i]) * (total / w));
+        }
+    }
+    return vec3(0.0);
+}
+
 // Radiance leaving `position` (unit normal n) towards v; `surface`: where its shadow rays start
-// (visibility.glsl; unused without RAY_TRACING).
+// (visibility.glsl; unused without RAY_TRACING). `light_choice` < 0: every light with its own
+// shadow ray; in [0, 1): one of them (`one_light`).
 vec3 lacquer_radiance_towards(LacquerParams p, vec3 view_blur, vec3 position, vec3 n, vec3 v,
-    RaySurface surface) {
+    RaySurface surface, float light_choice) {
     // Light-independent parts of f_r, once per point (see lacquer_brdf_view).
     vec2 nv2 = dot_compensated(n, v);
     vec3 f_diff = view_dependent_diffuse(p, nv2);
     vec3 radiance = vec3(0.0);
-    for (int i = 0; i < frame.light_count.x; ++i) {
-        vec4 lv = frame.light_vector[i];
-        vec3 l;
-        vec3 irradiance;
-        if (lv.w == 0.0) {
-            l = normalize(lv.xyz);
-            irradiance = frame.light_color[i].rgb;
-        } else {
-            vec3 to_light = lv.xyz - position;
-            float d2 = dot(to_light, to_light);
-            if (d2 <= 0.0) {
-                continue;
+    if (light_choice >= 0.0) {
+        radiance += one_light(p, position, n, v, nv2, f_diff, surface, light_choice);
+    } else {
+        for (int i = 0; i < frame.light_count.x; ++i) {
+            vec3 c = unshadowed_light(p, i, position, n, v, nv2, f_diff);
+            if (c != vec3(0.0)) {
+                // SPEC §6: lights with visibility (always 1 without ray tracing).
+                radiance += c * light_visibility(surface, frame.light_vector[i]);
             }
-            l = to_light * inversesqrt(d2);
-            irradiance = frame.light_color[i].rgb / d2;
         }
-        float nl = dot(n, l);
-        if (nl <= 0.0) {
-            continue;
-        }
-        // SPEC §6: lights with visibility (always 1 without ray tracing).
-        float visible = light_visibility(surface, lv);
-        radiance += lacquer_brdf_view(p, n, v, l, nv2, f_diff) * irradiance * (nl * visible);
     }
     if (frame.environment.x != 0) {
         radiance += environment_light(p, view_blur, n, v, nv2, f_diff);
@@ -78,7 +129,7 @@ vec3 lacquer_radiance(LacquerParams p, vec3 view_blur, vec3 position, vec3 inter
     RaySurface surface) {
     vec3 n = normalize(interpolated_normal);
     vec3 v = normalize(frame.eye.xyz - position);
-    return lacquer_radiance_towards(p, view_blur, position, n, v, surface);
+    return lacquer_radiance_towards(p, view_blur, position, n, v, surface, -1.0);
 }
 
 #endif

@@ -132,7 +132,10 @@ vec3 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
             p = lacquer_params(m);
             n = normal;
             v = -s;
-            vec3 radiance = lacquer_radiance_towards(p, view_blur, position, n, v, surface);
+            // One shadow ray at the hit, to one light (with shadows on; without, every light
+            // unshadowed is exact already).
+            float choice = SHADOWS ? light_number(key, uint(i), uint(depth)) : -1.0;
+            vec3 radiance = lacquer_radiance_towards(p, view_blur, position, n, v, surface, choice);
             total += throughput * weight * (radiance - hidden);
             throughput *= weight;
         }

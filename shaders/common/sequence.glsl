@@ -60,4 +60,11 @@ vec3 sample_numbers(uint key, uint ray, uint rays, uint depth) {
         unit_from_bits(hash_u32(h + 2u)));
 }
 
+// The number that picks the light of ray `ray`'s hit at bounce `depth` (next-event estimation,
+// lacquer_shade.glsl's `one_light`): hashed, after sample_numbers' three.
+float light_number(uint key, uint ray, uint depth) {
+    uint h = hash_u32(key ^ hash_u32(ray * 8u + depth));
+    return unit_from_bits(hash_u32(h + 3u));
+}
+
 #endif

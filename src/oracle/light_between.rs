@@ -64,6 +64,12 @@ pub mod sequence {
         x - x.floor()
     }
 
+    /// The number that picks the light at ray `ray`'s hit at bounce `depth`.
+    pub fn light_number(key: u32, ray: u32, depth: u32) -> f32 {
+        let h = hash_u32(key ^ hash_u32(ray.wrapping_mul(8).wrapping_add(depth)));
+        unit_from_bits(hash_u32(h.wrapping_add(3)))
+    }
+
     /// Three numbers in [0, 1) for ray `ray` of `rays` at bounce `depth`.
     pub fn sample_numbers(key: u32, ray: u32, rays: u32, depth: u32) -> [f32; 3] {
         if depth == 0 {
@@ -142,7 +148,7 @@ impl Twin<'_> {
                 let (position, normal) = self.surface_at(&hit);
                 let view = (eye - position).normalize();
                 let point = self.point(&hit, position, normal, view);
-                let mut radiance = self.radiance_towards(&point, rt.shadows);
+                let mut radiance = self.radiance_towards(&point, rt.shadows, None);
                 if rt.bounces > 0 {
                     let key = sequence::pixel_key(x, y, rt.seed);
                     // As the shader: an estimate below 0 is clamped.
@@ -184,31 +190,70 @@ impl Twin<'_> {
         }
     }
 
-    /// lacquer_shade.glsl's `lacquer_radiance_towards`: lights with visibility (or without,
-    /// `shadows` false) plus the environment model.
-    fn radiance_towards(&self, point: &Point, shadows: bool) -> DVec3 {
+    /// Light `light`'s f_r·E·(N·L) at the point, unshadowed (lacquer_shade.glsl's
+    /// `unshadowed_light`).
+    fn unshadowed_light(&self, point: &Point, light: &Light) -> DVec3 {
         let object = &self.scene.objects()[point.object];
-        let (p, n, v) = (
-            point.position.as_dvec3(),
-            point.normal.as_dvec3(),
-            point.view.as_dvec3(),
-        );
+        let (n, v) = (point.normal.as_dvec3(), point.view.as_dvec3());
+        let Some((l, irradiance)) = light.incident_at(point.position.as_dvec3()) else {
+            return DVec3::ZERO;
+        };
+        let nl = n.dot(l);
+        if nl <= 0.0 {
+            return DVec3::ZERO;
+        }
+        DVec3::from(lacquer_brdf(object.brdf, object.fresnel, n, v, l)) * irradiance * nl
+    }
+
+    /// lacquer_shade.glsl's `one_light`: one light chosen by `choice` with probability ∝ its
+    /// unshadowed contribution (summed over r, g, b), weighted back by the total.
+    fn one_light(&self, point: &Point, choice: f32) -> DVec3 {
+        let contributions: Vec<DVec3> = self
+            .lights
+            .iter()
+            .map(|light| self.unshadowed_light(point, light))
+            .collect();
+        let weight = |c: &DVec3| c.x + c.y + c.z;
+        let total: f64 = contributions.iter().map(weight).sum();
+        if total.is_nan() || total <= 0.0 {
+            return DVec3::ZERO;
+        }
+        let target = f64::from(choice) * total;
+        let mut below = 0.0;
+        let last = contributions.len() - 1;
+        for (i, (c, light)) in contributions.iter().zip(self.lights).enumerate() {
+            let w = weight(c);
+            below += w;
+            if w > 0.0 && (target < below || i == last) {
+                let visible = light_visible(self.scene.bvh(), &point.surface, light);
+                return match visible {
+                    true => *c * (total / w),
+                    false => DVec3::ZERO,
+                };
+            }
+        }
+        DVec3::ZERO
+    }
+
+    /// lacquer_shade.glsl's `lacquer_radiance_towards`: lights with visibility (or without,
+    /// `shadows` false; one light by next-event estimation with `light_choice`) plus the
+    /// environment model.
+    fn radiance_towards(&self, point: &Point, shadows: bool, light_choice: Option<f32>) -> DVec3 {
+        let object = &self.scene.objects()[point.object];
+        let (n, v) = (point.normal.as_dvec3(), point.view.as_dvec3());
         let nv = n.dot(v);
         if nv.is_nan() || nv <= 0.0 {
             return DVec3::ZERO;
         }
-        let mut radiance = DVec3::ZERO;
-        for light in self.lights {
-            let Some((l, irradiance)) = light.incident_at(p) else {
-                continue;
-            };
-            let nl = n.dot(l);
-            if nl <= 0.0 || (shadows && !light_visible(self.scene.bvh(), &point.surface, light)) {
-                continue;
-            }
-            let f_r = DVec3::from(lacquer_brdf(object.brdf, object.fresnel, n, v, l));
-            radiance += f_r * irradiance * nl;
-        }
+        let mut radiance = match light_choice {
+            Some(choice) => self.one_light(point, choice),
+            None => self
+                .lights
+                .iter()
+                .filter(|light| !shadows || light_visible(self.scene.bvh(), &point.surface, light))
+                .map(|light| self.unshadowed_light(point, light))
+                .sum(),
+        };
         if let Some(env) = self.environment {
             let c = DVec3::from(env.radiance);
             let specular = match env.model {
@@ -247,7 +292,8 @@ impl Twin<'_> {
                 };
                 let (position, normal) = self.surface_at(&hit);
                 at = self.point(&hit, position, normal, -s);
-                let radiance = self.radiance_towards(&at, rt.shadows);
+                let choice = rt.shadows.then(|| sequence::light_number(key, i, depth));
+                let radiance = self.radiance_towards(&at, rt.shadows, choice);
                 total += throughput * weight * (radiance - hidden);
                 throughput *= weight;
             }
