@@ -3,9 +3,9 @@
 // formula.
 //
 // Two quadratures of the lookups, picked (or blended) by the material's m: for a narrow lobe
-// (m ≤ 0.2) a lattice of nodes on the plane of incidence, each read at the blur that gives the
+// (m ≤ 0.1) a lattice of nodes on the plane of incidence, each read at the blur that gives the
 // lobe's width across the plane (`specular_lattice`: one lookup face-on, up to 33 at grazing);
-// for a wide one (m ≥ 0.3) ENV_SAMPLES half vectors from a Hammersley set in the Beckmann lobe,
+// for a wide one (m ≥ 0.2) ENV_SAMPLES half vectors from a Hammersley set in the Beckmann lobe,
 // in a frame whose first axis lies in the plane of incidence; each reflected direction s weighs
 // F(acos V·H)·G·(V·H)/(nv·nh) and reads the layers at the β whose lobe covers its share
 // 1/(ENV_SAMPLES·pdf(s)) of the sphere (filtered importance sampling, `specular_fis`). The lookups are bilinear by hand from the layers' texels

