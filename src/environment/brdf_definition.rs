@@ -8,7 +8,7 @@
 use glam::DVec3;
 use std::f64::consts::{PI, TAU};
 
-use super::cube::world_to_environment;
+use super::cube::{equirect_row_solid_angle, world_to_environment};
 use super::image::Equirect;
 use super::params::EnvironmentLight;
 use crate::model::brdf::{cook_torrance_g, lacquer_specular};
@@ -57,9 +57,7 @@ pub fn specular_integral_definition(
             continue;
         }
         let (sin_theta, cos_theta) = theta.sin_cos();
-        let top = PI * f64::from(y) / f64::from(cells_y);
-        let bottom = PI * f64::from(y + 1) / f64::from(cells_y);
-        let solid_angle = TAU / f64::from(cells_x) * (top.cos() - bottom.cos());
+        let solid_angle = equirect_row_solid_angle(y, cells_x, cells_y);
         for x in row_columns(cells_x, theta, theta_mirror, phi_mirror, reach) {
             let (sin_phi, cos_phi) = columns[x as usize];
             let dir = DVec3::new(sin_theta * sin_phi, cos_theta, -sin_theta * cos_phi);

@@ -10,7 +10,7 @@
 use glam::DVec3;
 use std::f64::consts::PI;
 
-use super::cube::world_to_environment;
+use super::cube::{equirect_row_solid_angle, equirect_to_direction, world_to_environment};
 use super::image::Equirect;
 use super::params::EnvironmentLight;
 use crate::gpu::shaders::interface::MAX_ENV_LIGHTS;
@@ -53,27 +53,16 @@ impl BrightSplit {
     }
 }
 
-/// Rec. 709 luminance of linear RGB.
+/// Luminance of a map pixel.
 fn luminance(p: [f32; 3]) -> f64 {
-    0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
+    crate::model::spectral::luminance(p.map(f64::from))
 }
 
-/// Solid angle of a pixel in row `y` of `height` rows, `width` columns (SPEC §1's equirect).
-fn pixel_solid_angle(y: u32, width: u32, height: u32) -> f64 {
-    let top = PI * f64::from(y) / f64::from(height);
-    let bottom = PI * f64::from(y + 1) / f64::from(height);
-    2.0 * PI / f64::from(width) * (top.cos() - bottom.cos())
-}
-
-/// The direction of pixel (x, y)'s centre (SPEC §4's inverse mapping).
+/// The direction of pixel (x, y)'s centre.
 fn pixel_direction(x: u32, y: u32, width: u32, height: u32) -> DVec3 {
-    let theta = PI * (f64::from(y) + 0.5) / f64::from(height);
-    let phi = 2.0 * PI * ((f64::from(x) + 0.5) / f64::from(width) - 0.5);
-    DVec3::new(
-        theta.sin() * phi.sin(),
-        theta.cos(),
-        -theta.sin() * phi.cos(),
-    )
+    let u = (f64::from(x) + 0.5) / f64::from(width);
+    let v = (f64::from(y) + 0.5) / f64::from(height);
+    equirect_to_direction(u, v)
 }
 
 /// One block's share of the bright part: which pixels, what they give.
@@ -93,7 +82,7 @@ pub fn split_bright(map: &Equirect) -> BrightSplit {
     let (w, h) = (map.width, map.height);
     let mut total = 0.0;
     for y in 0..h {
-        let dw = pixel_solid_angle(y, w, h);
+        let dw = equirect_row_solid_angle(y, w, h);
         for x in 0..w {
             total += luminance(map.pixels[(y * w + x) as usize]) * dw;
         }
@@ -104,7 +93,7 @@ pub fn split_bright(map: &Equirect) -> BrightSplit {
     let mut blocks: Vec<(u32, Block)> = Vec::new();
     let mut slots: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
     for y in 0..h {
-        let dw = pixel_solid_angle(y, w, h);
+        let dw = equirect_row_solid_angle(y, w, h);
         for x in 0..w {
             let index = (y * w + x) as usize;
             let p = map.pixels[index];
@@ -187,7 +176,7 @@ mod tests {
         let mut original = [0.0; 3];
         let mut kept = [0.0; 3];
         for y in 10..12u32 {
-            let dw = pixel_solid_angle(y, 64, 32);
+            let dw = equirect_row_solid_angle(y, 64, 32);
             for x in 20..23u32 {
                 let i = (y * 64 + x) as usize;
                 for c in 0..3 {

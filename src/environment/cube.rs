@@ -89,6 +89,14 @@ pub fn direction_to_equirect(d: DVec3) -> (f64, f64) {
     (u, v)
 }
 
+/// The solid angle of a pixel in row `y` of a `width` × `height` equirect map (SPEC §1):
+/// 2π/width · (cos θ_top − cos θ_bottom).
+pub fn equirect_row_solid_angle(y: u32, width: u32, height: u32) -> f64 {
+    let top = std::f64::consts::PI * f64::from(y) / f64::from(height);
+    let bottom = std::f64::consts::PI * f64::from(y + 1) / f64::from(height);
+    std::f64::consts::TAU / f64::from(width) * (top.cos() - bottom.cos())
+}
+
 /// SPEC §4 inverse: φ = 2π(u − ½), θ = πv, d = (sin θ sin φ, cos θ, −sin θ cos φ).
 pub fn equirect_to_direction(u: f64, v: f64) -> DVec3 {
     let phi = std::f64::consts::TAU * (u - 0.5);

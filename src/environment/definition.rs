@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 
-use super::cube::{direction_to_equirect, equirect_to_direction};
+use super::cube::{direction_to_equirect, equirect_row_solid_angle, equirect_to_direction};
 use super::image::Equirect;
 use super::oracle::source_pixel;
 
@@ -103,12 +103,8 @@ impl PixelGrid {
                 phi.sin_cos()
             })
             .collect();
-        let solid_angle = (0..height)
-            .map(|y| {
-                let top = pi * y as f64 / height as f64;
-                let bottom = pi * (y + 1) as f64 / height as f64;
-                std::f64::consts::TAU / width as f64 * (top.cos() - bottom.cos())
-            })
+        let solid_angle = (0..src.height)
+            .map(|y| equirect_row_solid_angle(y, src.width, src.height))
             .collect();
         Self {
             width,

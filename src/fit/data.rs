@@ -90,10 +90,7 @@ pub fn in_plane_theta_o(light: DVec3, view: DVec3, tolerance_deg: f64) -> Option
     }
 }
 
-/// Rec. 709 luminance of linear RGB (the Y row of the sRGB matrix).
-pub fn luminance(rgb: [f64; 3]) -> f64 {
-    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
-}
+pub use crate::model::spectral::luminance;
 
 #[cfg(test)]
 mod tests {

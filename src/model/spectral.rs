@@ -18,6 +18,11 @@ pub const SRGB_FROM_XYZ: [[f64; 3]; 3] = [
     [0.0557, -0.2040, 1.0570],
 ];
 
+/// Rec. 709 luminance of linear RGB (the Y row of the sRGB matrix).
+pub fn luminance(rgb: [f64; 3]) -> f64 {
+    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
+}
+
 /// The wavelength [nm] of grid sample `i` (380 + 5·i).
 pub fn grid_wavelength_nm(i: usize) -> f64 {
     GRID_START_NM + GRID_STEP_NM * i as f64
