@@ -5,10 +5,11 @@
 // Two quadratures of the lookups, picked (or blended) by the material's m: for a narrow lobe
 // (m ≤ 0.1) a lattice of nodes on the plane of incidence, each read at the blur that gives the
 // lobe's width across the plane (`specular_lattice`: one lookup face-on, up to 33 at grazing);
-// for a wide one (m ≥ 0.2) ENV_SAMPLES half vectors from a Hammersley set in the Beckmann lobe,
-// in a frame whose first axis lies in the plane of incidence; each reflected direction s weighs
-// F(acos V·H)·G·(V·H)/(nv·nh) and reads the layers at the β whose lobe covers its share
-// 1/(ENV_SAMPLES·pdf(s)) of the sphere (filtered importance sampling, `specular_fis`). The lookups are bilinear by hand from the layers' texels
+// for a wide one (m ≥ 0.2) ENV_SAMPLES half vectors from a Fibonacci lattice in the Beckmann
+// lobe, in a frame whose first axis lies in the plane of incidence; each reflected direction s
+// weighs F(acos V·H)·G·(V·H)/(nv·nh) and reads the layers at the β whose lobe covers its share
+// 1/(ENV_SAMPLES·pdf(s)) of the sphere (filtered importance sampling, `specular_fis`). The
+// lookups are bilinear by hand from the layers' texels
 // (`env_layer_texels`), with one seam rule written out here and in the twin: a tap beyond its face
 // reads the texel holding the tap's direction on the face that direction selects. The sampler's
 // own cube filtering leaves the edges and corners to the implementation.
@@ -260,7 +261,8 @@ vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv) {
     vec3 weights = vec3(0.0);
     for (int i = 0; i < ENV_SAMPLES; ++i) {
         float u = (float(i) + 0.5) / float(ENV_SAMPLES);
-        float w = float(bitfieldReverse(uint(i))) * (1.0 / 4294967296.0);
+        // The Fibonacci lattice (twin: `fibonacci_point`).
+        float w = fract(float(i) * GOLDEN_FRACTION);
         // u = 1 − exp(−tan²θ_H/m²): the Beckmann lobe's distribution of D·cos θ_H.
         float rest = 1.0 - u;
         float tan2 = -m2 * log(rest);

@@ -2,7 +2,7 @@
 // the objects change about the light a point receives (the light they send minus the
 // environment they hide), estimated with frame.light_transport.x rays per shaded point and
 // frame.light_transport.y bounces. Each ray samples the BRDF's two lobes (cosine-weighted
-// diffuse, Beckmann half vectors for the specular lobe) and weighs by the mixture's pdf
+// diffuse, Beckmann visible normals for the specular lobe) and weighs by the mixture's pdf
 // (one-sample multiple importance sampling, balance heuristic). A ray that meets nothing adds
 // nothing, so the term adds no noise where no object is in sight.
 //
@@ -13,6 +13,7 @@
 #define LIGHT_BETWEEN_GLSL
 
 #include "sequence.glsl"
+#include "visible_normals.glsl"
 
 // An orthonormal basis (t, b, n) (Duff et al., "Building an Orthonormal Basis, Revisited").
 void tangent_frame(vec3 n, out vec3 t, out vec3 b) {
@@ -48,18 +49,14 @@ bool sample_lobes(LacquerParams p, vec3 n, vec3 v, vec2 nv2, vec3 f_diff, vec3 u
     float p_specular = specular_lobe_probability(p, nv, f_diff);
     vec3 t, b;
     tangent_frame(n, t, b);
-    float phi = 2.0 * PI * u.z;
-    vec3 around = t * cos(phi) + b * sin(phi);
-    float m2 = p.beckmann_m * p.beckmann_m;
+    float m = p.beckmann_m;
     if (u.x < p_specular) {
-        // tan²θ_h = −m²·ln(1 − u): the Beckmann distribution of D·(N·H).
-        float tan2 = -m2 * log(1.0 - u.y);
-        float cos_h = inversesqrt(1.0 + tan2);
-        float sin_h = sqrt(max(1.0 - cos_h * cos_h, 0.0));
-        vec3 h = around * sin_h + n * cos_h;
+        vec3 h = sample_visible_normal(vec3(dot(v, t), dot(v, b), nv), m, u.yz);
+        h = t * h.x + b * h.y + n * h.z;
         s = 2.0 * dot(v, h) * h - v;
     } else {
-        s = around * sqrt(u.y) + n * sqrt(max(1.0 - u.y, 0.0));
+        float phi = 2.0 * PI * u.z;
+        s = (t * cos(phi) + b * sin(phi)) * sqrt(u.y) + n * sqrt(max(1.0 - u.y, 0.0));
     }
     float ns = dot(n, s);
     if (ns <= 0.0) {
@@ -68,8 +65,8 @@ bool sample_lobes(LacquerParams p, vec3 n, vec3 v, vec2 nv2, vec3 f_diff, vec3 u
     vec3 h = normalize(v + s);
     float nh = dot(n, h);
     float vh = dot(v, h);
-    float pdf_specular = nh > 0.0 && vh > 0.0
-        ? beckmann_d(n, h, nh, p.beckmann_m) * nh / (4.0 * vh)
+    float pdf_specular = nh > 0.0
+        ? visible_normal_pdf(beckmann_d(n, h, nh, m), beckmann_g1(nv, m), nv, vh)
         : 0.0;
     pdf = p_specular * pdf_specular + (1.0 - p_specular) * ns / PI;
     if (!(pdf > 0.0)) {

@@ -15,6 +15,7 @@ use glam::{DVec3, Vec3};
 
 use super::bvh::BvhHit;
 use super::shadows::{light_visible, offset_ray_origin, ray_surface, RaySurface, TracedScene};
+use super::visible_normals::{beckmann_g1, sample_visible_normal, visible_normal_pdf};
 use crate::environment::brdf_quadrature::albedo_at;
 use crate::environment::EnvironmentModel;
 use crate::model::brdf::{beckmann_d, view_dependent_diffuse};
@@ -318,17 +319,15 @@ impl Twin<'_> {
         let diffuse = (f_diff.iter().sum::<f64>() * std::f64::consts::PI) as f32;
         let p_specular = (specular / (specular + diffuse).max(1e-30)).clamp(0.1, 0.9);
         let (t, b) = tangent_frame(n);
-        let phi = 2.0 * std::f32::consts::PI * u[2];
-        let around = t * phi.cos() + b * phi.sin();
-        let m = object.brdf.beckmann_m as f32;
+        let m = object.brdf.beckmann_m;
         let s = if u[0] < p_specular {
-            let tan2 = -m * m * (1.0 - u[1]).ln();
-            let cos_h = (1.0 + tan2).sqrt().recip();
-            let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
-            let h = around * sin_h + n * cos_h;
+            let v_local = Vec3::new(v.dot(t), v.dot(b), nv);
+            let h = sample_visible_normal(v_local, m as f32, [u[1], u[2]]);
+            let h = t * h.x + b * h.y + n * h.z;
             2.0 * v.dot(h) * h - v
         } else {
-            around * u[1].sqrt() + n * (1.0 - u[1]).max(0.0).sqrt()
+            let phi = 2.0 * std::f32::consts::PI * u[2];
+            (t * phi.cos() + b * phi.sin()) * u[1].sqrt() + n * (1.0 - u[1]).max(0.0).sqrt()
         };
         let ns = n.dot(s);
         if ns <= 0.0 {
@@ -337,10 +336,10 @@ impl Twin<'_> {
         let (nd, vd, sd) = (n.as_dvec3(), v.as_dvec3(), s.as_dvec3());
         let h = (vd + sd).normalize();
         let (nh, vh) = (nd.dot(h), vd.dot(h));
-        let pdf_specular = if nh > 0.0 && vh > 0.0 {
-            beckmann_d(nh, object.brdf.beckmann_m) * nh / (4.0 * vh)
-        } else {
-            0.0
+        let nv = f64::from(nv);
+        let pdf_specular = match nh > 0.0 {
+            true => visible_normal_pdf(beckmann_d(nh, m), beckmann_g1(nv, m), nv, vh),
+            false => 0.0,
         };
         let p_specular = f64::from(p_specular);
         let pdf =

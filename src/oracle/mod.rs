@@ -8,6 +8,7 @@ pub mod light_between;
 pub mod path_tracer;
 pub mod raycast;
 pub mod shadows;
+pub mod visible_normals;
 
 pub use bvh::{BvhHit, SceneBvh};
 pub use raycast::{intersect, render, shade, AnalyticShape, OracleScene, SurfaceHit};
