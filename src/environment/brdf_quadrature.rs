@@ -25,6 +25,10 @@ use crate::model::{lacquer_specular, BrdfParams, FresnelTable};
 /// accuracy are measured in BENCHMARKS.md ("The `brdf` environment model").
 pub const BRDF_SAMPLES: u32 = 32;
 
+/// Layers K of the environment and residual a `brdf` draw reads (`PrefilterParams::for_model`):
+/// the most a draw takes.
+pub const BRDF_LAYERS: u32 = crate::gpu::shaders::interface::MAX_ENV_LAYERS as u32;
+
 /// The specular directional albedo A(nv) = ∫ f_spec·(N·s) dω_s of a material at the
 /// `ALBEDO_KNOTS` knots nv = (k/(ALBEDO_KNOTS − 1))², as the shaders read them: (nv, A_r, A_g,
 /// A_b). The knots crowd towards grazing, where A changes fastest.

@@ -14,8 +14,8 @@
 use super::bright::BrightLight;
 use super::image::{CubeImage, Equirect, PrefilteredEnvironment};
 use super::params::{
-    equirect_supersample, EnvironmentLight, LayerPlan, PrefilterParams, LOBE_CUTOFF, MAX_FACE_SIZE,
-    MIN_LAYER_FACE,
+    equirect_supersample, EnvironmentLight, EnvironmentModel, LayerPlan, PrefilterParams,
+    LOBE_CUTOFF, MAX_FACE_SIZE, MIN_LAYER_FACE,
 };
 use crate::gpu::shaders::interface::{
     BlurLayerParams, DownsampleParams, EquirectToCubeParams, IrradianceParams, NearHeader,
@@ -140,14 +140,19 @@ impl GpuEnvironment {
         }
     }
 
-    /// Attaches the map's bright split (the first one attached stays).
-    pub fn attach_bright(&self, bright: BrightEnvironment) {
+    /// Attaches the map's bright split (the first one attached stays). The residual must have
+    /// this map's layers (the same β and face sizes): a draw reads both through one layer table.
+    pub fn attach_bright(&self, bright: BrightEnvironment) -> Result<()> {
+        let (ours, theirs) = (self.layer_faces(), bright.residual.layer_faces());
+        if bright.residual.betas != self.betas || ours != theirs {
+            return Err(Error::Internal(format!(
+                "the bright split's residual has layers β {:?} at faces {theirs:?}, the map β {:?} \
+                 at faces {ours:?}: prefilter both with the same parameters",
+                bright.residual.betas, self.betas
+            )));
+        }
         let _ = self.bright.set(Box::new(bright));
-    }
-
-    /// Whether [`attach_bright`](Self::attach_bright) was called.
-    pub fn has_bright(&self) -> bool {
-        self.bright.get().is_some()
+        Ok(())
     }
 
     /// What the `brdf` model's lookups read and the lights it adds: the attached split's residual
@@ -434,6 +439,18 @@ pub fn largest_face_size(info: &AdapterInfo) -> u32 {
 /// 8K source (default face 2048) prefilters at face 1024 on lavapipe instead of failing.
 pub fn default_params(gpu: &GpuContext, source_width: u32) -> PrefilterParams {
     let mut params = PrefilterParams::for_source_width(source_width);
+    params.face_size = params.face_size.min(largest_face_size(gpu.info()));
+    params
+}
+
+/// [`default_params`] for the environment model that draws with them: SPEC §4's K = 8 for
+/// `paper`, [`PrefilterParams::for_model`]'s finer series for `brdf`.
+pub fn model_params(
+    gpu: &GpuContext,
+    source_width: u32,
+    model: EnvironmentModel,
+) -> PrefilterParams {
+    let mut params = PrefilterParams::for_model(source_width, model);
     params.face_size = params.face_size.min(largest_face_size(gpu.info()));
     params
 }

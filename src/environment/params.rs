@@ -63,6 +63,22 @@ impl PrefilterParams {
         }
     }
 
+    /// [`for_source_width`](Self::for_source_width) for the environment model that draws with
+    /// the layers: SPEC §4's K = 8 for `paper`; for `brdf`, whose lookups read the layer whose
+    /// blur matches each node's or sample's, `BRDF_LAYERS` over the same β range (a step of ×1.32
+    /// instead of ×1.92 between layers: the blend of two layers is further from the blur between
+    /// them the further apart they are; BENCHMARKS.md, "The `brdf` environment model").
+    pub fn for_model(width: u32, model: EnvironmentModel) -> Self {
+        let layers = match model {
+            EnvironmentModel::Paper => 8,
+            EnvironmentModel::Brdf => crate::environment::brdf_quadrature::BRDF_LAYERS,
+        };
+        Self {
+            layers,
+            ..Self::for_source_width(width)
+        }
+    }
+
     pub fn validate(&self) -> Result<()> {
         let n = self.face_size;
         if !(MIN_LAYER_FACE..=MAX_FACE_SIZE).contains(&n) || !n.is_power_of_two() {

@@ -3,12 +3,12 @@
 //! `scene::SceneRenderer`):
 //!
 //! ```text
-//!  EnvironmentSource ─► load ─► PrefilterParams for this source and device (face clamped)
-//!    ─► disk cache holds it? ── yes ─► upload
-//!                            └─ no ──► GPU prefilter (× intensity, rotated) ─► store
+//!  EnvironmentSource ─► load ─► PrefilterParams for this source, model and device (face
+//!    clamped; `PrefilterParams::for_model`) ─► disk cache holds it? ── yes ─► upload
+//!                                             └─ no ──► GPU prefilter (× intensity, rotated) ─► store
 //! ```
-//! The `brdf` model also asks for the map's bright split (`bright.rs`): the same steps for the
-//! residual map, beside the lights taken out of it.
+//! For the `brdf` model the map's bright split (`bright.rs`) comes with it: the same steps for the
+//! residual map of the same decoded map, beside the lights taken out of it.
 //!
 //! Owns the order of those steps and the warnings they raise, returned to the caller, never
 //! printed. Decoding (`load`), the cache file format (`disk_cache`) and the prefilter itself
@@ -19,10 +19,10 @@ use std::sync::Arc;
 
 use super::bright::split_bright;
 use super::disk_cache::{CacheKey, EnvironmentDiskCache};
-use super::gpu::{default_params, BrightEnvironment, GpuEnvironment, GpuPrefilter};
+use super::gpu::{model_params, BrightEnvironment, GpuEnvironment, GpuPrefilter};
 use super::image::Equirect;
 use super::load::{load_environment, LoadedEnvironment};
-use super::params::{EnvironmentLight, PrefilterParams};
+use super::params::{EnvironmentLight, EnvironmentModel, PrefilterParams};
 use crate::gpu::GpuContext;
 use crate::{Result, Warning};
 
@@ -117,24 +117,30 @@ impl EnvironmentPreparer {
         self.disk_cache = disk_cache;
     }
 
-    /// `source` lit by `light`, prefiltered for `gpu` (see the module doc). Warnings (replaced
-    /// pixels, once per map; a cache file ignored or not written) go to `warnings`: none of them
-    /// stops the render.
+    /// `source` lit by `light`, prefiltered for `gpu` and the environment model that draws with
+    /// it (see the module doc); for `brdf` with its bright split attached, from the same decoded
+    /// map. Warnings (replaced pixels, once per map; a cache file ignored or not written) go to
+    /// `warnings`: none of them stops the render.
     pub fn prepare(
         &mut self,
         gpu: &GpuContext,
         source: &EnvironmentSource,
-        light: EnvironmentLight,
+        (light, model): (EnvironmentLight, EnvironmentModel),
         warnings: &mut Vec<Warning>,
     ) -> Result<GpuEnvironment> {
         let loaded = source.load()?;
         self.note_replaced_pixels(&loaded, warnings);
-        self.prepare_image(gpu, &loaded.image, light, warnings)
+        let params = model_params(gpu, loaded.image.width, model);
+        let env = self.prepare_image(gpu, &loaded.image, (light, &params), warnings)?;
+        if model == EnvironmentModel::Brdf {
+            env.attach_bright(self.bright_of(gpu, &loaded.image, light, warnings)?)?;
+        }
+        Ok(env)
     }
 
     /// The `brdf` model's sources for `source` (bright.rs): the map's bright parts as lights in
-    /// the world, and its residual prefiltered as [`prepare`](Self::prepare) does a map (the disk
-    /// cache keeps it under the residual's own key).
+    /// the world, and its residual prefiltered as [`prepare`](Self::prepare) does a map for that
+    /// model (the disk cache keeps it under the residual's own key).
     pub fn prepare_bright(
         &mut self,
         gpu: &GpuContext,
@@ -143,9 +149,20 @@ impl EnvironmentPreparer {
         warnings: &mut Vec<Warning>,
     ) -> Result<BrightEnvironment> {
         let loaded = source.load()?;
-        let split = split_bright(&loaded.image);
+        self.bright_of(gpu, &loaded.image, light, warnings)
+    }
+
+    fn bright_of(
+        &mut self,
+        gpu: &GpuContext,
+        image: &Equirect,
+        light: EnvironmentLight,
+        warnings: &mut Vec<Warning>,
+    ) -> Result<BrightEnvironment> {
+        let split = split_bright(image);
         let lights = split.lights_in_world(light);
-        let residual = self.prepare_image(gpu, &split.residual, light, warnings)?;
+        let params = model_params(gpu, split.residual.width, EnvironmentModel::Brdf);
+        let residual = self.prepare_image(gpu, &split.residual, (light, &params), warnings)?;
         Ok(BrightEnvironment { residual, lights })
     }
 
@@ -153,20 +170,19 @@ impl EnvironmentPreparer {
         &mut self,
         gpu: &GpuContext,
         image: &Equirect,
-        light: EnvironmentLight,
+        (light, params): (EnvironmentLight, &PrefilterParams),
         warnings: &mut Vec<Warning>,
     ) -> Result<GpuEnvironment> {
-        let params = default_params(gpu, image.width);
         let key = self
             .disk_cache
             .as_ref()
-            .map(|_| CacheKey::new(image, &params, light));
+            .map(|_| CacheKey::new(image, params, light));
         if let Some(key) = &key {
-            if let Some(env) = self.cached(gpu, key, &params, warnings) {
+            if let Some(env) = self.cached(gpu, key, params, warnings) {
                 return Ok(env);
             }
         }
-        let env = self.prefilter(gpu, image, &params, light)?;
+        let env = self.prefilter(gpu, image, params, light)?;
         if let (Some(cache), Some(key)) = (&self.disk_cache, &key) {
             let stored = env.read_back(gpu).and_then(|host| cache.store(key, &host));
             if let Err(e) = stored {

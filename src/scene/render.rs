@@ -43,6 +43,8 @@ const MAX_CACHED_GPU_MESHES: usize = 48;
 struct CachedEnvironment {
     source: EnvironmentSource,
     light: EnvironmentLight,
+    /// The model it was prepared for (its layers: `PrefilterParams::for_model`).
+    model: EnvironmentModel,
     prefiltered: GpuEnvironment,
 }
 
@@ -143,10 +145,8 @@ impl SceneRenderer {
                 ViewBlur::of(&object.material),
             ));
         }
-        let env_index = self.environment(gpu, &scene.environment)?;
-        if let (Some(k), EnvironmentModel::Brdf) = (env_index, scene.render.environment_model) {
-            self.attach_bright(gpu, k)?;
-        }
+        let model = scene.render.environment_model;
+        let env_index = self.environment(gpu, &scene.environment, model)?;
         let objects: Vec<DrawObject> = meshes
             .iter()
             .zip(&shading)
@@ -266,42 +266,34 @@ impl SceneRenderer {
     }
 
     /// Index of the prefiltered environment in the cache, prepared on first use.
-    fn environment(&mut self, gpu: &GpuContext, spec: &EnvironmentSpec) -> Result<Option<usize>> {
+    fn environment(
+        &mut self,
+        gpu: &GpuContext,
+        spec: &EnvironmentSpec,
+        model: EnvironmentModel,
+    ) -> Result<Option<usize>> {
         let EnvironmentSpec::Map { source, light } = spec else {
             return Ok(None);
         };
         if let Some(k) = self
             .environments
             .iter()
-            .position(|c| c.source.is(source) && c.light.same_bits(light))
+            .position(|c| c.source.is(source) && c.light.same_bits(light) && c.model == model)
         {
             return Ok(Some(k));
         }
         // Room first: the old cube's memory is free before the new one is made.
         self.evict_environments(self.max_environments - 1);
-        let prefiltered = self
-            .preparer
-            .prepare(gpu, source, *light, &mut self.warnings)?;
+        let prefiltered =
+            self.preparer
+                .prepare(gpu, source, (*light, model), &mut self.warnings)?;
         self.environments.push(CachedEnvironment {
             source: source.clone(),
             light: *light,
+            model,
             prefiltered,
         });
         Ok(Some(self.environments.len() - 1))
-    }
-
-    /// Prepares the `brdf` model's bright split of cached environment `k` on its first use in
-    /// that model (a `paper` render never pays for it).
-    fn attach_bright(&mut self, gpu: &GpuContext, k: usize) -> Result<()> {
-        let cached = &self.environments[k];
-        if cached.prefiltered.has_bright() {
-            return Ok(());
-        }
-        let bright =
-            self.preparer
-                .prepare_bright(gpu, &cached.source, cached.light, &mut self.warnings)?;
-        self.environments[k].prefiltered.attach_bright(bright);
-        Ok(())
     }
 
     /// Drops the oldest prefiltered environments until at most `keep` remain.
