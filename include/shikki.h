@@ -469,6 +469,18 @@ enum ShikkiStatus shikki_scene_set_light_transport(struct ShikkiScene scene, int
 // `shadows` and `ray_tracing` are NULL or valid for one write.
 enum ShikkiStatus shikki_scene_get_light_transport(struct ShikkiScene scene, int32_t *shadows, int32_t *ray_tracing);
 
+// The filter of the light between objects' noise (scene files' `[render] denoise`): non-zero
+// (the default) filters the estimate of SPEC §6's integral below 256 rays, guided by the same
+// draw without it (docs/scene.md); zero gives the estimate as traced.
+enum ShikkiStatus shikki_scene_set_denoise(struct ShikkiScene scene, int32_t denoise);
+
+// The scene's denoise switch (1 on, 0 off), as set by `shikki_scene_set_denoise` or the scene
+// TOML's `[render]` table.
+//
+// # Safety
+// `denoise` is NULL (`SHIKKI_STATUS_NULL_ARGUMENT`) or valid for one write.
+enum ShikkiStatus shikki_scene_get_denoise(struct ShikkiScene scene, int32_t *denoise);
+
 // SPEC §6's integral (scene files' `[render] bounces`, `rays`, `seed`): `bounces` 0 (shadows
 // only) to 4, default 1; `rays` per shaded point 1 to 4096, default 8; `seed` of the sample
 // sequence (the same seed gives the same image). Out of range: INVALID_ARGUMENT naming the range,

@@ -154,6 +154,10 @@ pub struct RenderArgs {
     /// file it overrides `[render] rays`.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_RAYS)))]
     pub rays: Option<u32>,
+    /// The light between objects as traced, without the filter of its noise (which is on below
+    /// 256 rays). With a scene file it overrides `[render] denoise`.
+    #[arg(long = "no-denoise")]
+    pub no_denoise: bool,
 }
 
 impl RenderArgs {
@@ -175,6 +179,9 @@ impl RenderArgs {
         if let Some(rays) = self.rays {
             sets.push(format!("render.rays={rays}"));
         }
+        if self.no_denoise {
+            sets.push("render.denoise=false".into());
+        }
         sets
     }
 
@@ -187,6 +194,7 @@ impl RenderArgs {
         spec.ray_tracing &= !self.no_ray_tracing;
         spec.bounces = self.bounces.unwrap_or(spec.bounces);
         spec.rays = self.rays.unwrap_or(spec.rays);
+        spec.denoise &= !self.no_denoise;
     }
 }
 
@@ -364,6 +372,7 @@ impl Default for RenderArgs {
                 no_ray_tracing: false,
                 bounces: None,
                 rays: None,
+                no_denoise: false,
             },
         }
     }
@@ -475,4 +484,39 @@ pub struct BatchArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn render_args(flags: &[&str]) -> RenderArgs {
+        let argv = ["shikki", "render"].iter().chain(flags).copied();
+        match Cli::try_parse_from(argv) {
+            Ok(Cli {
+                command: Some(Command::Render(args)),
+            }) => args,
+            other => panic!("{flags:?} did not parse as render: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn light_between_flags_reach_the_scene_and_its_overrides() {
+        let args = render_args(&["--no-denoise", "--no-shadows", "--rays", "16"]);
+        let mut spec = RenderSpec::default();
+        args.apply_render_overrides(&mut spec);
+        assert!(!spec.denoise && !spec.shadows && spec.ray_tracing);
+        assert_eq!(spec.rays, 16);
+        let sets = args.render_overrides();
+        for set in [
+            "render.denoise=false",
+            "render.shadows=false",
+            "render.rays=16",
+        ] {
+            assert!(sets.iter().any(|s| s == set), "{sets:?} lacks {set}");
+        }
+        let mut spec = RenderSpec::default();
+        render_args(&[]).apply_render_overrides(&mut spec);
+        assert_eq!(spec, RenderSpec::default());
+    }
 }

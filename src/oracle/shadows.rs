@@ -170,6 +170,7 @@ impl<'a> TracedScene<'a> {
             bounces: 0,
             rays: 1,
             seed: 0,
+            denoise: false,
         };
         twin.render(camera, size, &rt)
     }

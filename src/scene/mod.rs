@@ -129,6 +129,8 @@ pub struct RenderSpec {
     pub rays: u32,
     /// Seeds the integral's sample sequence.
     pub seed: u32,
+    /// Filter the integral's estimate (`raster::draw::denoise`) where `rays` is low enough.
+    pub denoise: bool,
 }
 
 /// Rays per shaded point unless a scene says otherwise (BENCHMARKS.md, "Light between objects").
@@ -143,6 +145,7 @@ impl Default for RenderSpec {
             bounces: 1,
             rays: DEFAULT_RAYS,
             seed: 0,
+            denoise: true,
         }
     }
 }
@@ -164,6 +167,7 @@ impl RenderSpec {
             bounces: self.bounces,
             rays: self.rays,
             seed: self.seed,
+            denoise: self.denoise,
         };
         (self.ray_tracing && rt.traces()).then_some(rt)
     }

@@ -56,6 +56,7 @@ pub(super) const RENDER_KEYS: &[&str] = &[
     "bounces",
     "rays",
     "seed",
+    "denoise",
 ];
 pub(super) const OUTPUT_KEYS: &[&str] = &[
     "size",

@@ -140,6 +140,7 @@ pub(super) fn render(node: &Node) -> Result<RenderSpec> {
             "bounces" => spec.bounces = whole(&e.node, "bounces", 0..=MAX_BOUNCES)?,
             "rays" => spec.rays = whole(&e.node, "rays", 1..=MAX_RAYS)?,
             "seed" => spec.seed = whole(&e.node, "seed", 0..=u32::MAX)?,
+            "denoise" => spec.denoise = boolean(&e.node, "denoise")?,
             _ => {
                 let text = string(&e.node, "environment_model")?;
                 spec.environment_model = EnvironmentModel::from_name(text).ok_or_else(|| {

@@ -1,5 +1,5 @@
 //! `[render]` keys of light between objects (SPEC §6): `ray_tracing`, `shadows`, `bounces`,
-//! `rays`, `seed` — their defaults, range errors naming file, line and the valid range, `--set`
+//! `rays`, `seed`, `denoise` — their defaults, range errors naming file, line and the valid range, `--set`
 //! overrides and batch sweeps. No GPU: parsing and planning only.
 
 use std::path::Path;
@@ -25,18 +25,19 @@ fn defaults_are_ray_traced_shadows_one_bounce_and_the_default_rays() {
         bounces,
         rays,
         seed,
+        denoise,
         ..
     } = scene.render;
-    assert!(shadows && ray_tracing);
+    assert!(shadows && ray_tracing && denoise);
     assert_eq!((bounces, rays, seed), (1, DEFAULT_RAYS, 0));
 }
 
 #[test]
 fn every_key_reaches_the_scene() {
-    let scene = parse("ray_tracing = false\nshadows = false\nbounces = 3\nrays = 64\nseed = 77\n")
-        .expect("the keys parse");
+    let keys = "ray_tracing = false\nshadows = false\nbounces = 3\nrays = 64\nseed = 77\n";
+    let scene = parse(&format!("{keys}denoise = false\n")).expect("the keys parse");
     let r = scene.render;
-    assert!(!r.ray_tracing && !r.shadows);
+    assert!(!r.ray_tracing && !r.shadows && !r.denoise);
     assert_eq!((r.bounces, r.rays, r.seed), (3, 64, 77));
 }
 
@@ -54,6 +55,10 @@ fn out_of_range_and_wrong_types_name_the_line_and_the_range() {
         (
             "ray_tracing = 1\n",
             &["scene.toml:5", "`ray_tracing`", "true or false"][..],
+        ),
+        (
+            "denoise = \"on\"\n",
+            &["scene.toml:5", "`denoise`", "true or false"][..],
         ),
         (
             "bounce = 2\n",
@@ -75,12 +80,17 @@ fn set_overrides_the_keys() {
     let dir = Path::new(".");
     let mut doc = SceneDocument::parse("[[object]]\nmesh = \"builtin:sphere\"\n", "s.toml", dir)
         .expect("scene parses");
-    for set in ["render.bounces=2", "render.rays=9", "render.shadows=false"] {
+    for set in [
+        "render.bounces=2",
+        "render.rays=9",
+        "render.shadows=false",
+        "render.denoise=false",
+    ] {
         doc.set(set, dir).expect("the path exists");
     }
     let scene = doc.build().expect("the overridden scene builds");
     assert_eq!((scene.render.bounces, scene.render.rays), (2, 9));
-    assert!(!scene.render.shadows);
+    assert!(!scene.render.shadows && !scene.render.denoise);
     doc.set("render.bounces=7", dir).expect("the path exists");
     let message = doc.build().unwrap_err().to_string();
     assert!(

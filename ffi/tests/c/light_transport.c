@@ -123,6 +123,22 @@ int main(void) {
     EXPECT(shikki_scene_get_light_paths(scene, &bounces, &count, &seed), SHIKKI_STATUS_OK);
     EXPECT_TRUE(bounces == 2 && count == 8 && seed == 3);
 
+    /* The denoise switch: on by default, off by the setter or the TOML, NULL refused. */
+    int denoise = -1;
+    EXPECT(shikki_scene_get_denoise(scene, &denoise), SHIKKI_STATUS_OK);
+    EXPECT_TRUE(denoise == 1);
+    EXPECT(shikki_scene_set_denoise(scene, 0), SHIKKI_STATUS_OK);
+    EXPECT(shikki_scene_get_denoise(scene, &denoise), SHIKKI_STATUS_OK);
+    EXPECT_TRUE(denoise == 0);
+    EXPECT(shikki_scene_get_denoise(scene, NULL), SHIKKI_STATUS_NULL_ARGUMENT);
+    EXPECT(shikki_scene_set_denoise((ShikkiScene){0}, 1), SHIKKI_STATUS_INVALID_HANDLE);
+    ShikkiScene raw_toml = {0};
+    EXPECT(shikki_scene_create_toml("[render]\ndenoise = false\n", NULL, &raw_toml),
+           SHIKKI_STATUS_OK);
+    EXPECT(shikki_scene_get_denoise(raw_toml, &denoise), SHIKKI_STATUS_OK);
+    EXPECT_TRUE(denoise == 0);
+    EXPECT(shikki_scene_destroy(raw_toml), SHIKKI_STATUS_OK);
+
     size_t messages = 99;
     EXPECT(shikki_renderer_validation_message_count(renderer, &messages), SHIKKI_STATUS_OK);
     EXPECT_TRUE(messages == 0);

@@ -12,6 +12,8 @@
 //!   │                shade.frag: each pixel's distinct surfaces shaded once, samples averaged │
 //!   │ copy-out       the strip's rows → the readback buffer → host                            │
 //!   └─────────────────────────────────────────────────────────────────────────────────────────┘
+//!  denoise         with rays traced and `RayTracing::denoise`: the same draw without SPEC §6's
+//!                  integral, then the integral filtered on the host (denoise.rs)
 //! ```
 //!
 //! That gives what forward shading and an MSAA resolve give, without llvmpipe shading whole 4×4
@@ -29,6 +31,7 @@
 //! per draw by [`LacquerRenderer::render`]; callers that draw the same mesh again (the scene
 //! renderer) upload a [`GpuMesh`] once and use [`LacquerRenderer::render_meshes`].
 
+pub mod denoise;
 pub(crate) mod frame;
 pub mod gpu_mesh;
 mod passes;
@@ -53,6 +56,7 @@ use crate::gpu::{
 use crate::output::HdrImage;
 use crate::raster::camera::PixelRect;
 use crate::{Error, Result};
+use denoise::{denoise, denoise_sigma};
 use frame::{fresnel_knots, DrawBuffers};
 use passes::{
     record_deferred, record_forward, strips, timings_from, DeferredPasses, DrawnMesh,
@@ -161,8 +165,38 @@ impl LacquerRenderer {
         self.draw(gpu, scene, meshes, settings, options)
     }
 
-    /// The recipe: the frame data, then the passes of `options.shading`, strip by strip.
+    /// The draw, and with the denoise on (and `rays` low enough for it: `denoise_sigma`) the same
+    /// draw without the integral, its guide and what the filtered integral is added to
+    /// (denoise.rs). The timings are both draws'.
     fn draw(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &DrawScene<'_>,
+        meshes: &[&GpuMesh],
+        settings: &RenderSettings,
+        options: DrawOptions,
+    ) -> Result<(HdrImage, Option<DrawTimings>)> {
+        let (full, mut timings) = self.draw_once(gpu, scene, meshes, settings, options)?;
+        let denoised = scene
+            .ray_tracing
+            .filter(|rt| rt.denoise && rt.bounces > 0)
+            .and_then(|rt| denoise_sigma(rt.rays).map(|sigma| (rt, sigma)));
+        let Some((rt, sigma)) = denoised else {
+            return Ok((full, timings));
+        };
+        let without = DrawScene {
+            ray_tracing: Some(RayTracing { bounces: 0, ..rt }),
+            ..*scene
+        };
+        let (base, base_timings) = self.draw_once(gpu, &without, meshes, settings, options)?;
+        if let (Some(sum), Some(more)) = (timings.as_mut(), base_timings) {
+            *sum += more;
+        }
+        Ok((denoise(&full, &base, sigma), timings))
+    }
+
+    /// The recipe: the frame data, then the passes of `options.shading`, strip by strip.
+    fn draw_once(
         &mut self,
         gpu: &GpuContext,
         scene: &DrawScene<'_>,

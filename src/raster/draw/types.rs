@@ -99,6 +99,8 @@ pub struct RayTracing {
     pub rays: u32,
     /// Seeds the sample sequence: the same seed gives the same image.
     pub seed: u32,
+    /// Filter the integral's estimate (denoise.rs) where `rays` is low enough for it to help.
+    pub denoise: bool,
 }
 
 impl RayTracing {

@@ -120,6 +120,7 @@ fn gpu_render(
         bounces: 0,
         rays: 1,
         seed: 0,
+        denoise: false,
     });
     draw(
         gpu,
