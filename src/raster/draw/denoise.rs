@@ -14,8 +14,6 @@
 //! filter is off and the image is the draw itself. Where the integral is 0 (nothing to meet) the
 //! output is the draw bit for bit: base + 0.
 
-use rayon::prelude::*;
-
 use crate::output::HdrImage;
 
 /// σ of the spatial Gaussian at 8 rays, in pixels; at other counts σ = this · √(8/rays).
@@ -58,38 +56,42 @@ pub fn denoise(full: &HdrImage, base: &HdrImage, sigma: f64) -> HdrImage {
     let tolerance = 2.0 * DENOISE_GUIDE_TOLERANCE as f32;
     let inv_tolerance2 = 1.0 / (2.0 * tolerance * tolerance);
     let mut out = full.clone();
-    out.pixels
-        .par_chunks_mut(width.max(1))
-        .enumerate()
-        .for_each(|(y, row)| {
-            let rows = y.saturating_sub(radius)..(y + radius + 1).min(full.height as usize);
-            for (x, pixel) in row.iter_mut().enumerate() {
-                let Some(own) = guide[y * width + x] else {
-                    continue;
-                };
-                let (mut sum, mut weights) = ([0.0f32; 3], 0.0f32);
-                for qy in rows.clone() {
-                    let wy = spatial[qy.abs_diff(y)];
-                    for qx in x.saturating_sub(radius)..(x + radius + 1).min(width) {
-                        let q = qy * width + qx;
-                        let Some(other) = guide[q] else {
-                            continue;
-                        };
-                        let difference: f32 = (0..3).map(|c| (own[c] - other[c]).powi(2)).sum();
-                        let w = wy * spatial[qx.abs_diff(x)] * (-difference * inv_tolerance2).exp();
-                        for c in 0..3 {
-                            sum[c] += w * integral[q][c];
-                        }
-                        weights += w;
+    let filter_row = |y: usize, row: &mut [[f32; 4]]| {
+        let rows = y.saturating_sub(radius)..(y + radius + 1).min(full.height as usize);
+        for (x, pixel) in row.iter_mut().enumerate() {
+            let Some(own) = guide[y * width + x] else {
+                continue;
+            };
+            let (mut sum, mut weights) = ([0.0f32; 3], 0.0f32);
+            for qy in rows.clone() {
+                let wy = spatial[qy.abs_diff(y)];
+                for qx in x.saturating_sub(radius)..(x + radius + 1).min(width) {
+                    let q = qy * width + qx;
+                    let Some(other) = guide[q] else {
+                        continue;
+                    };
+                    let difference: f32 = (0..3).map(|c| (own[c] - other[c]).powi(2)).sum();
+                    let w = wy * spatial[qx.abs_diff(x)] * (-difference * inv_tolerance2).exp();
+                    for c in 0..3 {
+                        sum[c] += w * integral[q][c];
                     }
-                }
-                // The pixel itself weighs 1 (covered, no guide difference): weights ≥ 1.
-                let b = base.pixels[y * width + x];
-                for c in 0..3 {
-                    pixel[c] = (b[c] + sum[c] / weights).max(0.0);
+                    weights += w;
                 }
             }
-        });
+            // The pixel itself weighs 1 (covered, no guide difference): weights ≥ 1.
+            let b = base.pixels[y * width + x];
+            for c in 0..3 {
+                pixel[c] = (b[c] + sum[c] / weights).max(0.0);
+            }
+        }
+    };
+    // One thread, the caller's: a thread the library started (or std's handle for a scoped
+    // one's parent) would outlive the call in a C caller's process, which valgrind reports
+    // through the C API. The filter is a small share of a ray-traced draw (BENCHMARKS.md).
+    let width = width.max(1);
+    for (y, row) in out.pixels.chunks_mut(width).enumerate() {
+        filter_row(y, row);
+    }
     out
 }
 
