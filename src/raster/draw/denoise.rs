@@ -10,7 +10,7 @@
 //! The base image has no noise and keeps every edge the objects and their lighting make, so the
 //! filter averages the integral's noise across a surface without carrying it over an edge. It is
 //! deterministic (plain sums in a fixed order, no state between draws). σ shrinks as 1/√rays, so
-//! the error against the converged integral still falls as `rays` grows: from 128 rays on the
+//! the error against the converged integral still falls as `rays` grows: from 256 rays on the
 //! filter is off and the image is the draw itself. Where the integral is 0 (nothing to meet) the
 //! output is the draw bit for bit: base + 0.
 
@@ -22,7 +22,7 @@ pub const DENOISE_SIGMA_AT_8_RAYS: f64 = 2.0;
 /// The guide difference (per channel, relative: |a − b|/(a + b)) at which a neighbour's weight
 /// falls to e^{−½}.
 pub const DENOISE_GUIDE_TOLERANCE: f64 = 0.1;
-/// Below this σ (pixels) the filter is off: at ≥ 128 rays the noise is under the blur it would add.
+/// Below this σ (pixels) the filter is off (from 256 rays): the noise is under the blur it adds.
 const SMALLEST_SIGMA: f64 = 0.5;
 
 /// The filter's σ in pixels for `rays` rays per shaded point; `None` where it is off.
