@@ -470,8 +470,8 @@ enum ShikkiStatus shikki_scene_set_light_transport(struct ShikkiScene scene, int
 enum ShikkiStatus shikki_scene_get_light_transport(struct ShikkiScene scene, int32_t *shadows, int32_t *ray_tracing);
 
 // The filter of the light between objects' noise (scene files' `[render] denoise`): non-zero
-// (the default) filters the estimate of SPEC §6's integral below 256 rays, guided by the same
-// draw without it (docs/scene.md); zero gives the estimate as traced.
+// (the default) filters the estimate of SPEC §6's integral below 256 rays, guided by the image
+// without it and by the estimate's variance (docs/scene.md); zero gives the estimate as traced.
 enum ShikkiStatus shikki_scene_set_denoise(struct ShikkiScene scene, int32_t denoise);
 
 // The scene's denoise switch (1 on, 0 off), as set by `shikki_scene_set_denoise` or the scene

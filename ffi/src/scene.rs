@@ -480,8 +480,8 @@ pub unsafe extern "C" fn shikki_scene_get_light_transport(
 }
 
 /// The filter of the light between objects' noise (scene files' `[render] denoise`): non-zero
-/// (the default) filters the estimate of SPEC §6's integral below 256 rays, guided by the same
-/// draw without it (docs/scene.md); zero gives the estimate as traced.
+/// (the default) filters the estimate of SPEC §6's integral below 256 rays, guided by the image
+/// without it and by the estimate's variance (docs/scene.md); zero gives the estimate as traced.
 #[no_mangle]
 pub extern "C" fn shikki_scene_set_denoise(scene: ShikkiScene, denoise: i32) -> ShikkiStatus {
     ffi_boundary!({

@@ -92,12 +92,16 @@ vec3 hidden_environment(vec3 s, float pdf, int n) {
 // `surface`; `key` the pixel's (sequence.glsl). Each ray is a path of up to `bounces`
 // reflections: at each surface y it meets it adds throughput·w·(L_o(y) − L(s)), L_o(y) the
 // lights with visibility plus the environment model at y, which is SPEC §6's recursion with one
-// sample per level.
-vec3 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint key) {
+// sample per level. Returns the mean over the rays (rgb) and the variance of that mean's grey
+// value (r + g + b)/3 estimated from the rays' spread (w; with one ray, its square).
+vec4 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint key) {
     int rays = frame.light_transport.x;
     int bounces = frame.light_transport.y;
     vec3 total = vec3(0.0);
+    // Σ of each ray's grey value and of its square.
+    vec2 moments = vec2(0.0);
     for (int i = 0; i < rays; ++i) {
+        vec3 path = vec3(0.0);
         LacquerParams p = p0;
         vec3 n = n0;
         vec3 v = v0;
@@ -133,11 +137,15 @@ vec3 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
             // unshadowed is exact already).
             float choice = SHADOWS ? light_number(key, uint(i), uint(depth)) : -1.0;
             vec3 radiance = lacquer_radiance_towards(p, view_blur, position, n, v, surface, choice);
-            total += throughput * weight * (radiance - hidden);
+            path += throughput * weight * (radiance - hidden);
             throughput *= weight;
         }
+        total += path;
+        float grey = (path.r + path.g + path.b) / 3.0;
+        moments += vec2(grey, grey * grey);
     }
-    return total / float(max(rays, 1));
+    float n = float(max(rays, 1));
+    return vec4(total / n, sample_variance_of_mean(moments, n));
 }
 
 #endif

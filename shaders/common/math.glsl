@@ -38,4 +38,14 @@ float atan2_accurate(float y, float x) {
     return y < 0.0 ? -a : a;
 }
 
+// The variance of the mean of n samples from their sums (Σx, Σx²): the unbiased sample
+// variance over n; with one sample, that sample's square (its spread is unknown, and a lone
+// estimate is all noise). Twin: oracle::light_between::sample_variance_of_mean.
+float sample_variance_of_mean(vec2 moments, float n) {
+    if (n < 2.0) {
+        return moments.x * moments.x;
+    }
+    return max(moments.y - moments.x * moments.x / n, 0.0) / (n * (n - 1.0));
+}
+
 #endif

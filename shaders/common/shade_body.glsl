@@ -29,22 +29,33 @@ layout(set = 0, binding = OBJECT_MATERIAL_BINDING) uniform textureBuffer object_
 #endif
 
 layout(location = 0) out vec4 out_radiance; // linear radiance, alpha = coverage
+#ifdef RAY_TRACING
+// The integral image (raster/draw/denoise.rs): rgb the integral's share of out_radiance, alpha
+// the variance of its grey value as the rays estimate it (the clear value −1 where no sample is
+// covered: this draw runs only where one is). With it out_radiance is not clamped at 0: the host
+// clamps it (raster/draw/mod.rs).
+layout(location = 1) out vec4 out_integral;
+#endif
 
 // `normal`: the G-buffer's (w: the triangle, with RAY_TRACING); `key`: the pixel's
-// (sequence.glsl).
-vec3 shade_object(int object, vec3 position, vec4 normal, uint key) {
+// (sequence.glsl). `integral`: what SPEC §6's integral added (rgb) and its variance (w).
+vec3 shade_object(int object, vec3 position, vec4 normal, uint key, out vec4 integral) {
     ObjectMaterial m = FETCH_OBJECT_MATERIAL(object_material, object);
     vec3 view_blur = vec3(m.beta_normal, m.beta_grazing, m.beta_power);
     LacquerParams p = lacquer_params(m);
+    integral = vec4(0.0);
 #ifdef RAY_TRACING
     vec3 n = normalize(normal.xyz);
     RaySurface surface = ray_surface(object, int(normal.w), position, n);
     vec3 radiance = lacquer_radiance(p, view_blur, position, normal.xyz, surface);
     if (frame.light_transport.y > 0) {
         vec3 v = normalize(frame.eye.xyz - position);
-        // The integral's estimate can exceed what the environment gave (few rays, most of them
-        // hiding a bright sky); the radiance it estimates cannot be negative.
-        radiance = max(radiance + light_between(p, n, v, surface, key), vec3(0.0));
+        // Unclamped: the integral's estimate can exceed what the environment gave (few rays,
+        // most of them hiding a bright sky), but the clamp at 0 of the radiance it estimates is
+        // the host's, after the denoise: a noisy estimate clamped pixel by pixel is biased
+        // upwards where the radiance is near 0 (a black bowl mirrored in a black tray).
+        integral = light_between(p, n, v, surface, key);
+        radiance += integral.rgb;
     }
     return radiance;
 #else
@@ -65,6 +76,8 @@ void main() {
         }
     }
     vec4 sum = vec4(0.0);
+    // The integral's share of `sum` and the variance of the pixel's mean: Σ (count/N)²·v.
+    vec4 integral_sum = vec4(0.0);
     // The pixel in whole-image coordinates keys its sample sequence.
     uint key = pixel_key(uvec2(texel.x, texel.y + int(frame.strip_offset.y)),
         uint(frame.light_transport.z));
@@ -99,9 +112,15 @@ void main() {
         }
         // `first` always: a NaN (never written by gbuffer.frag) must not stall the loop.
         same = (same & todo) | (todo != 0u ? 1u << first : 0u);
-        vec3 radiance = shade_object(max(int(p.w) - 1, 0), p.xyz, n, key);
+        vec4 integral;
+        vec3 radiance = shade_object(max(int(p.w) - 1, 0), p.xyz, n, key, integral);
+        float share = float(bitCount(same)) / float(SAMPLE_COUNT);
         sum += vec4(radiance, 1.0) * float(bitCount(same));
+        integral_sum += integral * vec4(vec3(share), share * share);
         todo &= ~same;
     } while (todo != 0u);
     out_radiance = sum / float(SAMPLE_COUNT);
+#ifdef RAY_TRACING
+    out_integral = integral_sum;
+#endif
 }

@@ -328,13 +328,19 @@ fn ray_query_lack(
         .push_next(&mut ray_query);
     // SAFETY: the chained structs live on this stack frame; their extensions are supported.
     unsafe { instance.get_physical_device_features2(device, &mut features) };
-    let geometry_shader = features.features.geometry_shader;
+    let (geometry_shader, independent_blend) = (
+        features.features.geometry_shader,
+        features.features.independent_blend,
+    );
     let lacking: Vec<&str> = [
         (features12.buffer_device_address, "bufferDeviceAddress"),
         (acceleration.acceleration_structure, "accelerationStructure"),
         (ray_query.ray_query, "rayQuery"),
         // The ray-traced G-buffer pass reads gl_PrimitiveID in its fragment shader.
         (geometry_shader, "geometryShader"),
+        // The ray-traced shading pass has a second colour target (the integral image) that its
+        // coverage draw leaves alone while writing the first.
+        (independent_blend, "independentBlend"),
     ]
     .iter()
     .filter(|(value, _)| *value == vk::FALSE)

@@ -27,15 +27,14 @@ impl ImageUse {
 /// The attachments of one dynamic-rendering pass.
 pub struct RenderTargets<'a> {
     /// Multisampled (or single-sampled) colour targets in location order; at least one. The
-    /// first `cleared_colors` are cleared to `clear_color`, the rest start undefined (every
-    /// sample a draw covers is written, and the rest are never read).
+    /// first `clear_colors.len()` are cleared, colour i to `clear_colors[i]`; the rest start
+    /// undefined (every sample a draw covers is written, and the rest are never read).
     pub colors: &'a [&'a Image],
-    pub cleared_colors: usize,
+    pub clear_colors: &'a [[f32; 4]],
     /// Single-sampled image the first colour is resolved into (averaged) when it is multisampled.
     pub resolve: Option<&'a Image>,
     /// Cleared to 1; None for a pass without depth (its colour targets may differ in samples).
     pub depth: Option<&'a Image>,
-    pub clear_color: [f32; 4],
 }
 
 pub struct Recorder<'a> {
@@ -125,7 +124,7 @@ impl Recorder<'_> {
                 vk::RenderingAttachmentInfo::default()
                     .image_view(image.view)
                     .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                    .load_op(if i < targets.cleared_colors {
+                    .load_op(if i < targets.clear_colors.len() {
                         vk::AttachmentLoadOp::CLEAR
                     } else {
                         vk::AttachmentLoadOp::DONT_CARE
@@ -133,7 +132,7 @@ impl Recorder<'_> {
                     .store_op(vk::AttachmentStoreOp::STORE)
                     .clear_value(vk::ClearValue {
                         color: vk::ClearColorValue {
-                            float32: targets.clear_color,
+                            float32: targets.clear_colors.get(i).copied().unwrap_or_default(),
                         },
                     })
             })

@@ -121,11 +121,13 @@ fn create_device(
     let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
         .dynamic_rendering(true)
         .synchronization2(true);
-    // geometryShader: the ray-traced G-buffer pass reads gl_PrimitiveID (checked with the
+    // geometryShader: the ray-traced G-buffer pass reads gl_PrimitiveID; independentBlend: its
+    // shading pass writes one of two colour targets in one draw (both checked with the
     // ray-query features).
     let features = vk::PhysicalDeviceFeatures::default()
         .shader_float64(adapter.info.shader_float64)
-        .geometry_shader(ray_query);
+        .geometry_shader(ray_query)
+        .independent_blend(ray_query);
     // Ray queries: the KHR extension structs, not Vulkan 1.4 core ones (the validation layer
     // 1.3.239 that Debian 12 ships rejects those).
     let mut features12 = vk::PhysicalDeviceVulkan12Features::default().buffer_device_address(true);

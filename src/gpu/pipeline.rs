@@ -261,8 +261,9 @@ pub struct GraphicsPipelineDesc<'a> {
     pub depth_test: Option<DepthTest>,
     /// The fragment stage's 32-bit specialization constants: entry i sets `constant_id = i`.
     pub fragment_constants: &'a [u32],
-    /// false: the colour attachments keep their values (a depth-only draw).
-    pub color_writes: bool,
+    /// The first `written_colors` colour attachments are written; the rest keep their values
+    /// (0: a depth-only draw).
+    pub written_colors: usize,
 }
 
 /// A graphics pipeline for dynamic rendering (no render pass objects), with dynamic viewport and
@@ -319,7 +320,9 @@ impl GraphicsPipeline {
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(conv::sample_count_flag(desc.samples));
         let depth = depth_state(desc.depth_test);
-        let blend_attachments = vec![blend_attachment(desc.color_writes); desc.color_formats.len()];
+        let blend_attachments: Vec<_> = (0..desc.color_formats.len())
+            .map(|i| blend_attachment(i < desc.written_colors))
+            .collect();
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&DYNAMIC_STATES);

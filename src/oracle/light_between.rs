@@ -134,10 +134,24 @@ impl Twin<'_> {
         (width, height): (u32, u32),
         rt: &RayTracing,
     ) -> HdrImage {
+        self.render_with_integral(camera, (width, height), rt).0
+    }
+
+    /// [`render`](Self::render) and the integral image of the draw's
+    /// `LacquerRenderer::render_with_integral`: rgb the integral's estimate (before the clamp),
+    /// alpha the variance of its grey value, −1 where no object is met.
+    pub fn render_with_integral(
+        &self,
+        camera: &Camera,
+        (width, height): (u32, u32),
+        rt: &RayTracing,
+    ) -> (HdrImage, HdrImage) {
         let mut image = HdrImage::new(width, height);
+        let mut integral = HdrImage::new(width, height);
         let eye = camera.eye.as_vec3();
         for y in 0..height {
             for x in 0..width {
+                integral.set(x, y, [0.0, 0.0, 0.0, -1.0]);
                 let dir = camera.primary_ray(f64::from(x) + 0.5, f64::from(y) + 0.5, width, height);
                 let Some(hit) = self
                     .scene
@@ -150,16 +164,21 @@ impl Twin<'_> {
                 let view = (eye - position).normalize();
                 let point = self.point(&hit, position, normal, view);
                 let mut radiance = self.radiance_towards(&point, rt.shadows, None);
+                let mut added = [0.0f32; 4];
                 if rt.bounces > 0 {
                     let key = sequence::pixel_key(x, y, rt.seed);
-                    // As the shader: an estimate below 0 is clamped.
-                    radiance = (radiance + self.light_between(&point, key, rt)).max(DVec3::ZERO);
+                    let (estimate, variance) = self.light_between(&point, key, rt);
+                    let [r, g, b] = estimate.to_array();
+                    added = [r as f32, g as f32, b as f32, variance as f32];
+                    // As the draw: a radiance below 0 is clamped (after the integral image).
+                    radiance = (radiance + estimate).max(DVec3::ZERO);
                 }
                 let [r, g, b] = radiance.to_array();
                 image.set(x, y, [r as f32, g as f32, b as f32, 1.0]);
+                integral.set(x, y, added);
             }
         }
-        image
+        (image, integral)
     }
 
     /// The point and shading normal of ray_surface.glsl's `hit_surface`.
@@ -271,13 +290,16 @@ impl Twin<'_> {
         radiance
     }
 
-    /// light_between.glsl's `light_between`.
-    fn light_between(&self, primary: &Point, key: u32, rt: &RayTracing) -> DVec3 {
+    /// light_between.glsl's `light_between`: the mean over the rays and the variance of its grey
+    /// value.
+    fn light_between(&self, primary: &Point, key: u32, rt: &RayTracing) -> (DVec3, f64) {
         let hidden = self
             .environment
             .map_or(DVec3::ZERO, |env| DVec3::from(env.radiance));
         let mut total = DVec3::ZERO;
+        let mut moments = (0.0, 0.0);
         for i in 0..rt.rays {
+            let mut path = DVec3::ZERO;
             let mut throughput = DVec3::ONE;
             let mut at = Point { ..*primary };
             for depth in 0..rt.bounces {
@@ -295,11 +317,15 @@ impl Twin<'_> {
                 at = self.point(&hit, position, normal, -s);
                 let choice = rt.shadows.then(|| sequence::light_number(key, i, depth));
                 let radiance = self.radiance_towards(&at, rt.shadows, choice);
-                total += throughput * weight * (radiance - hidden);
+                path += throughput * weight * (radiance - hidden);
                 throughput *= weight;
             }
+            total += path;
+            let grey = (path.x + path.y + path.z) / 3.0;
+            moments = (moments.0 + grey, moments.1 + grey * grey);
         }
-        total / f64::from(rt.rays.max(1))
+        let n = f64::from(rt.rays.max(1));
+        (total / n, sample_variance_of_mean(moments, n))
     }
 
     /// light_between.glsl's `sample_lobes`: the direction (f32, as the shader forms it) and the
@@ -363,9 +389,29 @@ fn tangent_frame(n: Vec3) -> (Vec3, Vec3) {
     )
 }
 
+/// math.glsl's `sample_variance_of_mean`: the variance of the mean of `n` samples from their sums
+/// (Σx, Σx²), unbiased; with one sample, its square.
+pub fn sample_variance_of_mean((sum, squares): (f64, f64), n: f64) -> f64 {
+    if n < 2.0 {
+        return sum * sum;
+    }
+    (squares - sum * sum / n).max(0.0) / (n * (n - 1.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::sequence::*;
+
+    #[test]
+    fn the_variance_of_a_mean_is_the_sample_variance_over_n() {
+        use super::sample_variance_of_mean;
+        // 1, 2, 3, 4: sample variance 5/3, of the mean 5/12.
+        let v = sample_variance_of_mean((10.0, 30.0), 4.0);
+        assert!((v - 5.0 / 12.0).abs() < 1e-15, "{v}");
+        // Equal samples: none; one sample: its square.
+        assert_eq!(sample_variance_of_mean((6.0, 12.0), 3.0), 0.0);
+        assert_eq!(sample_variance_of_mean((-0.5, 0.25), 1.0), 0.25);
+    }
 
     #[test]
     fn radical_inverses_are_the_van_der_corput_sequences() {

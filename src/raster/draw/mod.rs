@@ -10,10 +10,11 @@
 //!   │ G-buffer pass  gbuffer.frag: each covered sample keeps position, normal and object     │
 //!   │ shading pass   coverage.frag: coverage depth (+ the environment background)             │
 //!   │                shade.frag: each pixel's distinct surfaces shaded once, samples averaged │
+//!   │                (ray-traced: + the integral image, SPEC §6's term and its variance)       │
 //!   │ copy-out       the strip's rows → the readback buffer → host                            │
 //!   └─────────────────────────────────────────────────────────────────────────────────────────┘
-//!  denoise         with rays traced and `RayTracing::denoise`: the same draw without SPEC §6's
-//!                  integral, then the integral filtered on the host (denoise.rs)
+//!  denoise         with rays traced and `RayTracing::denoise`: the integral image the shading
+//!                  pass wrote beside the image, filtered on the host (denoise.rs)
 //! ```
 //!
 //! That gives what forward shading and an MSAA resolve give, without llvmpipe shading whole 4×4
@@ -66,7 +67,7 @@ use pipelines::{
     fresnel_on_pow2_grid, graphics_set, shade_set, PipelineKey, PipelineKind, PipelineTable,
     ShadeVariant,
 };
-use targets::TargetCache;
+use targets::{traced_strip_rows, TargetCache};
 use types::validate;
 
 /// The lacquer raster renderer; keeps its pipelines, targets and buffers between draws.
@@ -165,9 +166,34 @@ impl LacquerRenderer {
         self.draw(gpu, scene, meshes, settings, options)
     }
 
-    /// The draw, and with the denoise on (and `rays` low enough for it: `denoise_sigma`) the same
-    /// draw without the integral, its guide and what the filtered integral is added to
-    /// (denoise.rs). The timings are both draws'.
+    /// [`render`](Self::render) without the denoise, and the integral image of a ray-traced
+    /// draw (None without rays): per pixel, rgb the estimate of SPEC §6's integral that the
+    /// image holds (sample-averaged, before the image's clamp at 0), alpha the variance of its
+    /// grey value (r + g + b)/3 as the rays estimate it, −1 where no object covers the pixel.
+    /// What the denoise filters, and what tests compare with the CPU twin's.
+    pub fn render_with_integral(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &DrawScene<'_>,
+        settings: &RenderSettings,
+    ) -> Result<(HdrImage, Option<HdrImage>)> {
+        validate(gpu, scene, settings)?;
+        let meshes: Vec<GpuMesh> = scene
+            .objects
+            .iter()
+            .map(|o| GpuMesh::upload(gpu, o.mesh))
+            .collect::<Result<_>>()?;
+        let meshes: Vec<&GpuMesh> = meshes.iter().collect();
+        let drawn = self.draw_once(gpu, scene, &meshes, settings, DrawOptions::default())?;
+        let image = match &drawn.integral {
+            Some(_) => clamped(drawn.image),
+            None => drawn.image,
+        };
+        Ok((image, drawn.integral))
+    }
+
+    /// The draw, and with the denoise on (and `rays` low enough for it: `denoise_sigma`) its
+    /// integral image filtered (denoise.rs).
     fn draw(
         &mut self,
         gpu: &GpuContext,
@@ -176,23 +202,18 @@ impl LacquerRenderer {
         settings: &RenderSettings,
         options: DrawOptions,
     ) -> Result<(HdrImage, Option<DrawTimings>)> {
-        let (full, mut timings) = self.draw_once(gpu, scene, meshes, settings, options)?;
-        let denoised = scene
+        let drawn = self.draw_once(gpu, scene, meshes, settings, options)?;
+        let sigma = scene
             .ray_tracing
             .filter(|rt| rt.denoise && rt.bounces > 0)
-            .and_then(|rt| denoise_sigma(rt.rays).map(|sigma| (rt, sigma)));
-        let Some((rt, sigma)) = denoised else {
-            return Ok((full, timings));
+            .and_then(|rt| denoise_sigma(rt.rays));
+        // A ray-traced draw leaves the radiance unclamped, for the denoise.
+        let image = match (sigma, &drawn.integral) {
+            (Some(sigma), Some(integral)) => denoise(&drawn.image, integral, sigma),
+            (None, Some(_)) => clamped(drawn.image),
+            (_, None) => drawn.image,
         };
-        let without = DrawScene {
-            ray_tracing: Some(RayTracing { bounces: 0, ..rt }),
-            ..*scene
-        };
-        let (base, base_timings) = self.draw_once(gpu, &without, meshes, settings, options)?;
-        if let (Some(sum), Some(more)) = (timings.as_mut(), base_timings) {
-            *sum += more;
-        }
-        Ok((denoise(&full, &base, sigma), timings))
+        Ok((image, drawn.timings))
     }
 
     /// The recipe: the frame data, then the passes of `options.shading`, strip by strip.
@@ -203,7 +224,7 @@ impl LacquerRenderer {
         meshes: &[&GpuMesh],
         settings: &RenderSettings,
         options: DrawOptions,
-    ) -> Result<(HdrImage, Option<DrawTimings>)> {
+    ) -> Result<Drawn> {
         let Resources {
             sampler,
             buffers,
@@ -269,6 +290,25 @@ impl LacquerRenderer {
     }
 }
 
+/// `image` with every radiance below 0 raised to 0: what SPEC §6's estimate (unclamped in a
+/// ray-traced draw's image) estimates cannot be negative.
+fn clamped(mut image: HdrImage) -> HdrImage {
+    for pixel in &mut image.pixels {
+        for c in &mut pixel[..3] {
+            *c = c.max(0.0);
+        }
+    }
+    image
+}
+
+/// What one draw read back.
+struct Drawn {
+    image: HdrImage,
+    /// A ray-traced draw's integral image ([`LacquerRenderer::render_with_integral`]).
+    integral: Option<HdrImage>,
+    timings: Option<DrawTimings>,
+}
+
 /// What every pass of one draw reads.
 struct DrawInputs<'a> {
     gpu: &'a GpuContext,
@@ -325,7 +365,7 @@ fn draw_deferred(
     buffers: &mut DrawBuffers,
     mut frame: Frame,
     fresnel_pow2_grid: bool,
-) -> Result<(HdrImage, Option<DrawTimings>)> {
+) -> Result<Drawn> {
     let DrawInputs { gpu, scene, .. } = *inputs;
     let environment_background = scene.background == Background::Environment;
     // The ray tracing of this draw, if it traces any ray.
@@ -366,6 +406,9 @@ fn draw_deferred(
     let object_sets = inputs.object_sets(&gbuffer, buffers)?;
     let objects: Vec<DrawnMesh<'_>> = inputs.meshes.iter().copied().zip(&object_sets).collect();
     let targets = targets.deferred(gpu, inputs.target_size())?;
+    if ray_traced {
+        targets.integral(gpu)?;
+    }
     let gbuffer_images = (&targets.attachments.position, &targets.attachments.normal);
     let shade_set = shade_set(
         gpu,
@@ -392,7 +435,17 @@ fn draw_deferred(
     };
     let settings = inputs.settings;
     let mut timings = inputs.stamps.map(|_| DrawTimings::default());
-    for strip in strips(settings.width, settings.height, targets.strip_rows) {
+    // A ray-traced strip also stays within a submit's share of paths.
+    let rows = match traced {
+        Some(rt) => {
+            let paths = u64::from(rt.rays) * u64::from(rt.bounces);
+            targets
+                .strip_rows
+                .min(traced_strip_rows(settings.width, paths))
+        }
+        None => targets.strip_rows,
+    };
+    for strip in strips(settings.width, settings.height, rows) {
         // The previous strip's submit has finished (submit_and_wait), so the frame can be
         // rewritten for this one.
         frame.strip_offset[1] = strip.first_row as f32;
@@ -401,7 +454,18 @@ fn draw_deferred(
         targets.used = true;
         inputs.add_strip_timings(&mut timings)?;
     }
-    read_back(&targets.readback, settings, timings)
+    let integral = match targets.attachments.integral.as_mut() {
+        Some(integral) if ray_traced => {
+            integral.used = true;
+            Some(read_back(&integral.readback, settings)?)
+        }
+        _ => None,
+    };
+    Ok(Drawn {
+        image: read_back(&targets.readback, settings)?,
+        integral,
+        timings,
+    })
 }
 
 /// The forward draw (the benchmark's trivial shader): per strip, the background and the meshes
@@ -412,7 +476,7 @@ fn draw_forward(
     targets: &mut TargetCache,
     buffers: &mut DrawBuffers,
     mut frame: Frame,
-) -> Result<(HdrImage, Option<DrawTimings>)> {
+) -> Result<Drawn> {
     let DrawInputs { gpu, scene, .. } = *inputs;
     let mesh = pipelines.get(gpu, inputs.key(PipelineKind::Trivial))?;
     let with_background = scene.background == Background::Environment;
@@ -446,7 +510,11 @@ fn draw_forward(
         targets.used = true;
         inputs.add_strip_timings(&mut timings)?;
     }
-    read_back(&targets.readback, settings, timings)
+    Ok(Drawn {
+        image: read_back(&targets.readback, settings)?,
+        integral: None,
+        timings,
+    })
 }
 
 /// A top-level acceleration structure over `meshes` (instance i is object i; meshes without
@@ -480,17 +548,12 @@ fn object_geometry(gpu: &GpuContext, meshes: &[&GpuMesh]) -> Result<Buffer> {
     gpu_mesh::upload(gpu, "object geometry", &rows, BufferUsage::STORAGE)
 }
 
-fn read_back(
-    readback: &Buffer,
-    settings: &RenderSettings,
-    timings: Option<DrawTimings>,
-) -> Result<(HdrImage, Option<DrawTimings>)> {
-    let image = HdrImage {
+fn read_back(readback: &Buffer, settings: &RenderSettings) -> Result<HdrImage> {
+    Ok(HdrImage {
         width: settings.width,
         height: settings.height,
         pixels: readback.read()?,
-    };
-    Ok((image, timings))
+    })
 }
 
 /// The stand-in for a draw without an environment: black, uploaded rather than prefiltered, so

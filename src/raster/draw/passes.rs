@@ -1,14 +1,15 @@
 //! The passes of one strip of a draw, one function each, recorded into one submit:
 //!
 //! - the lacquer draw (deferred): barriers → [`gbuffer_pass`] → [`shading_pass`] (its
-//!   [`coverage_draw`], then its [`shade_draw`]) → [`copy_out`];
+//!   [`coverage_draw`], then its [`shade_draw`]) → [`copy_out`] (of the integral image too where
+//!   rays are traced);
 //! - the forward draw (the benchmark's trivial shader): barriers → [`forward_pass`] (background,
 //!   meshes, MSAA resolve) → [`copy_out`];
 //!
 //! with a timestamp before and after the drawing and after the copy.
 
 use super::gpu_mesh::GpuMesh;
-use super::targets::{Deferred, DrawTargets, Forward};
+use super::targets::{Deferred, DrawTargets, Forward, IntegralTarget};
 use super::types::DrawTimings;
 use crate::gpu::{
     Access, Buffer, DescriptorSet, GpuContext, GraphicsPipeline, Image, ImageUse, Layout, Recorder,
@@ -61,9 +62,14 @@ pub(crate) struct DeferredPasses<'a> {
     /// only `shaded`.
     pub coverage_everywhere: bool,
     pub clear_color: [f32; 4],
-    /// The shading pass traces rays: its top-level structure was built by an earlier submit.
+    /// The shading pass traces rays: its top-level structure was built by an earlier submit,
+    /// and it writes the integral image too (the targets hold one).
     pub ray_traced: bool,
 }
+
+/// The integral image's value where no object covers the pixel: no integral, and a variance of
+/// −1, which no covered pixel has (shade_body.glsl).
+pub(crate) const NO_INTEGRAL: [f32; 4] = [0.0, 0.0, 0.0, -1.0];
 
 /// What the forward draw's pass draws with, the same for every strip.
 pub(crate) struct ForwardPasses<'a> {
@@ -93,7 +99,7 @@ pub(crate) fn record_deferred(
 ) -> Result<()> {
     gpu.submit_and_wait(|rec| {
         mark(rec, stamps, 0);
-        deferred_barriers(rec, targets);
+        deferred_barriers(rec, targets, passes);
         if passes.ray_traced {
             // The acceleration-structure builds (earlier submits) before the shading pass's
             // ray queries.
@@ -104,6 +110,9 @@ pub(crate) fn record_deferred(
         shading_pass(rec, targets, passes, strip);
         mark(rec, stamps, 2);
         copy_out(rec, &targets.attachments.output, &targets.readback, strip);
+        if let Some(integral) = integral_of(targets, passes) {
+            copy_out(rec, &integral.image, &integral.readback, strip);
+        }
         mark(rec, stamps, 3);
         Ok(())
     })?;
@@ -161,10 +170,26 @@ fn draw_objects(rec: &mut Recorder<'_>, pipeline: &GraphicsPipeline, objects: &[
     }
 }
 
+/// The integral image the shading pass writes, if it traces rays.
+fn integral_of<'a>(
+    targets: &'a DrawTargets<Deferred>,
+    passes: &DeferredPasses<'_>,
+) -> Option<&'a IntegralTarget> {
+    targets
+        .attachments
+        .integral
+        .as_ref()
+        .filter(|_| passes.ray_traced)
+}
+
 /// First use: nothing to wait for. Reuse: the previous strip's or draw's shading pass read the
-/// G-buffer, its depth tests wrote both depth targets and its copy read the output and wrote the
-/// readback buffer.
-fn deferred_barriers(rec: &mut Recorder<'_>, targets: &DrawTargets<Deferred>) {
+/// G-buffer, its depth tests wrote both depth targets and its copy read the output (and the
+/// integral image) and wrote the readback buffer (and the integral's).
+fn deferred_barriers(
+    rec: &mut Recorder<'_>,
+    targets: &DrawTargets<Deferred>,
+    passes: &DeferredPasses<'_>,
+) {
     let (gbuffer_before, depth_before, output_before) = if targets.used {
         (
             Access::GraphicsShaderRead,
@@ -182,7 +207,15 @@ fn deferred_barriers(rec: &mut Recorder<'_>, targets: &DrawTargets<Deferred>) {
         rec.image_barrier(depth, discard(depth_before), DEPTH_ATTACHMENT);
     }
     rec.image_barrier(&images.output, discard(output_before), COLOR_ATTACHMENT);
-    if targets.used {
+    let integral = integral_of(targets, passes);
+    if let Some(integral) = integral {
+        let before = match integral.used {
+            true => Access::TransferRead,
+            false => Access::Nothing,
+        };
+        rec.image_barrier(&integral.image, discard(before), COLOR_ATTACHMENT);
+    }
+    if targets.used || integral.is_some_and(|i| i.used) {
         rec.memory_barrier(Access::TransferWrite, Access::TransferWrite);
     }
 }
@@ -201,11 +234,10 @@ fn gbuffer_pass(
         // Both cleared: the shading pass compares every sample's normal (both sides of a branch
         // run: quirk `loop_body_runs_when_no_lane_enters`), and a comparison with uncleared
         // memory is a use of uninitialised values, which valgrind reports in the C API tests.
-        cleared_colors: 2,
+        // w = 0: no object covers the sample.
+        clear_colors: &[[0.0; 4]; 2],
         resolve: None,
         depth: Some(&targets.depth),
-        // w = 0: no object covers the sample.
-        clear_color: [0.0; 4],
     });
     set_strip_viewport(rec, strip);
     draw_objects(rec, passes.gbuffer, passes.objects);
@@ -224,14 +256,22 @@ fn shading_pass(
     passes: &DeferredPasses<'_>,
     strip: Strip,
 ) {
+    let output = &targets.attachments.output;
+    let integral = integral_of(targets, passes).map(|i| &i.image);
+    let (colors, clear_colors) = match integral {
+        Some(integral) => (
+            vec![output, integral],
+            vec![passes.clear_color, NO_INTEGRAL],
+        ),
+        None => (vec![output], vec![passes.clear_color]),
+    };
     rec.begin_rendering(&RenderTargets {
-        colors: &[&targets.attachments.output],
-        cleared_colors: 1,
-        resolve: None,
-        depth: Some(&targets.attachments.coverage),
+        colors: &colors,
         // The background where it is a colour (or transparent); coverage.frag draws the
         // environment one.
-        clear_color: passes.clear_color,
+        clear_colors: &clear_colors,
+        resolve: None,
+        depth: Some(&targets.attachments.coverage),
     });
     set_strip_viewport(rec, strip);
     if passes.coverage_everywhere {
@@ -337,10 +377,9 @@ fn forward_pass(
 ) {
     rec.begin_rendering(&RenderTargets {
         colors: &[&targets.attachments.color],
-        cleared_colors: 1,
+        clear_colors: &[passes.clear_color],
         resolve: targets.attachments.resolve.as_ref(),
         depth: Some(&targets.depth),
-        clear_color: passes.clear_color,
     });
     set_strip_viewport(rec, strip);
     if let Some((pipeline, set)) = passes.background {

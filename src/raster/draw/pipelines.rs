@@ -233,7 +233,7 @@ impl PipelineKey {
                 write: true,
             }),
             fragment_constants: constants.words(),
-            color_writes: true,
+            written_colors: color_formats.len(),
         }
     }
 
@@ -247,6 +247,15 @@ impl PipelineKey {
         depth_test: Option<DepthTest>,
         constants: &'a DrawConstants,
     ) -> GraphicsPipelineDesc<'a> {
+        let ray_traced = match self.kind {
+            PipelineKind::Coverage(_, ray_traced) => ray_traced,
+            PipelineKind::Shade(variant) => variant.ray_traced,
+            _ => false,
+        };
+        let color_formats: &'static [Format] = match ray_traced {
+            true => &TRACED_COLOR_FORMATS,
+            false => &COLOR_FORMAT,
+        };
         GraphicsPipelineDesc {
             name,
             vertex_spirv: crate::gpu::shaders::BACKGROUND_VERT,
@@ -254,19 +263,27 @@ impl PipelineKey {
             bindings,
             vertex_stride: VERTEX_STRIDE,
             vertex_attributes: &[],
-            color_formats: &COLOR_FORMAT,
+            color_formats,
             depth_format: Some(Format::Depth32Float),
             samples,
             depth_test,
             fragment_constants: constants.words(),
-            // A colour background is the clear colour: coverage.frag writes only depth.
-            color_writes: !matches!(self.kind, PipelineKind::Coverage(false, _)),
+            written_colors: match self.kind {
+                // A colour background is the clear colour: coverage.frag writes only depth.
+                PipelineKind::Coverage(false, _) => 0,
+                // It writes the background, never the integral image (its clear value stays
+                // where no shade draw writes: `NO_INTEGRAL`).
+                PipelineKind::Coverage(true, _) => 1,
+                _ => color_formats.len(),
+            },
         }
     }
 }
 
 const GBUFFER_FORMATS: [Format; 2] = [Format::Rgba32Float, Format::Rgba32Float];
 const COLOR_FORMAT: [Format; 1] = [Format::Rgba32Float];
+/// A ray-traced shading pass's targets: the image and the integral image (targets.rs).
+const TRACED_COLOR_FORMATS: [Format; 2] = [Format::Rgba32Float, Format::Rgba32Float];
 
 /// Every pipeline built so far.
 #[derive(Default)]

@@ -3,7 +3,8 @@
 //!
 //! - The lacquer draw is deferred: a G-buffer (position + object, normal; RGBA32F, multisampled)
 //!   and depth, and the single-sampled image the shading pass writes, copied to the readback
-//!   buffer.
+//!   buffer. A ray-traced draw's shading pass also writes the integral's estimate (SPEC §6)
+//!   into a second image with its own readback buffer, made by the first such draw.
 //! - The forward draw (the benchmark's trivial shader) has a colour target, its MSAA resolve and
 //!   depth, copied to the readback buffer.
 //!
@@ -31,6 +32,19 @@ pub fn strip_rows(width: u32, height: u32, samples: u32, budget: u64) -> u32 {
     rows.min(u64::from(height)) as u32
 }
 
+/// Paths (rays × bounces per shaded point, summed over a strip's pixels) one submit traces at
+/// most: about 8 s of lavapipe on two cores (~1 M rays/s, each path ray with its shadow ray),
+/// far inside the submit timeout (600 s) on a loaded machine too. Without it a 512² image at 128
+/// rays was one submit of ~10 minutes.
+pub const PATHS_PER_SUBMIT: u64 = 8 << 20;
+
+/// Rows per submit of a ray-traced draw `width` wide tracing `paths` paths per pixel (at least
+/// one row).
+pub fn traced_strip_rows(width: u32, paths: u64) -> u32 {
+    let row_paths = u64::from(width) * paths.max(1);
+    (PATHS_PER_SUBMIT / row_paths.max(1)).clamp(1, u64::from(u32::MAX)) as u32
+}
+
 /// Width, height, samples.
 pub(crate) type TargetSize = (u32, u32, u32);
 
@@ -49,6 +63,16 @@ pub(crate) struct Deferred {
     pub output: Image,
     /// Single-sampled depth of the shading pass: 0 where a G-buffer sample is covered.
     pub coverage: Image,
+    /// The ray-traced shading pass's second output (shade_body.glsl's `out_integral`).
+    pub integral: Option<IntegralTarget>,
+}
+
+/// The ray-traced draw's integral image: its strip and the whole image's readback buffer.
+pub(crate) struct IntegralTarget {
+    pub image: Image,
+    pub readback: Buffer,
+    /// Whether a draw used it before (then the first barriers wait for that use).
+    pub used: bool,
 }
 
 impl Attachments for Deferred {
@@ -60,6 +84,24 @@ impl Attachments for Deferred {
             normal: gbuffer("g-buffer normal")?,
             output: gpu.create_image(ImageDesc::color_target("shaded", width, rows, 1))?,
             coverage: gpu.create_image(ImageDesc::depth_target("coverage", width, rows, 1))?,
+            integral: None,
+        })
+    }
+}
+
+impl DrawTargets<Deferred> {
+    /// The integral image of these targets, made on first use.
+    pub fn integral(&mut self, gpu: &GpuContext) -> Result<&mut IntegralTarget> {
+        let (width, height, _) = self.size;
+        let rows = self.strip_rows;
+        get_or_try_insert(&mut self.attachments.integral, || {
+            let image_bytes = u64::from(width) * u64::from(height) * 16;
+            Ok(IntegralTarget {
+                image: gpu.create_image(ImageDesc::color_target("integral", width, rows, 1))?,
+                readback: gpu
+                    .create_buffer(BufferDesc::readback("integral readback", image_bytes))?,
+                used: false,
+            })
         })
     }
 }
@@ -175,6 +217,20 @@ mod tests {
     use crate::raster::draw::{Background, DrawObject, DrawScene, LacquerRenderer, RenderSettings};
     use crate::raster::mesh::BuiltinMesh;
     use crate::raster::Camera;
+
+    /// A submit traces at most `PATHS_PER_SUBMIT` paths, and at least one row.
+    #[test]
+    fn a_traced_strip_holds_a_submits_share_of_paths() {
+        use super::{traced_strip_rows, PATHS_PER_SUBMIT};
+        assert_eq!(traced_strip_rows(512, 128), 128);
+        assert_eq!(traced_strip_rows(1024, 8), 1024);
+        assert_eq!(traced_strip_rows(8192, 4096 * 4), 1);
+        assert_eq!(traced_strip_rows(1, 0), PATHS_PER_SUBMIT as u32);
+        for (width, paths) in [(512, 128), (1000, 24), (64, 4096)] {
+            let rows = u64::from(traced_strip_rows(width, paths));
+            assert!(rows * u64::from(width) * paths <= PATHS_PER_SUBMIT);
+        }
+    }
 
     /// A tall image drawn in strips (one submit each, viewport moved per strip) equals the same
     /// image drawn in one pass, under synchronisation validation: every sample keeps its window

@@ -136,13 +136,47 @@ fn gpu_render(
 /// sample per pixel, transparent background, validation checked.
 pub(super) fn draw(
     gpu: &GpuContext,
-    (meshes, materials): (&[Mesh], &[&Material]),
-    (camera, lights): (&Camera, &[Light]),
-    (environment, environment_model): (Option<&GpuEnvironment>, EnvironmentModel),
+    objects: (&[Mesh], &[&Material]),
+    view: (&Camera, &[Light]),
+    environment: (Option<&GpuEnvironment>, EnvironmentModel),
     ray_tracing: Option<RayTracing>,
     size: u32,
 ) -> HdrImage {
-    let objects: Vec<DrawObject<'_>> = meshes
+    let objects = draw_objects(objects);
+    let image = LacquerRenderer::new()
+        .render(
+            gpu,
+            &scene(&objects, view, environment, ray_tracing),
+            &settings(size),
+        )
+        .unwrap();
+    assert_no_validation_messages(gpu);
+    image
+}
+
+/// The draw without the denoise and its integral image (`render_with_integral`).
+pub(super) fn draw_with_integral(
+    gpu: &GpuContext,
+    objects: (&[Mesh], &[&Material]),
+    view: (&Camera, &[Light]),
+    environment: (Option<&GpuEnvironment>, EnvironmentModel),
+    ray_tracing: Option<RayTracing>,
+    size: u32,
+) -> (HdrImage, Option<HdrImage>) {
+    let objects = draw_objects(objects);
+    let drawn = LacquerRenderer::new()
+        .render_with_integral(
+            gpu,
+            &scene(&objects, view, environment, ray_tracing),
+            &settings(size),
+        )
+        .unwrap();
+    assert_no_validation_messages(gpu);
+    drawn
+}
+
+fn draw_objects<'a>((meshes, materials): (&'a [Mesh], &[&'a Material])) -> Vec<DrawObject<'a>> {
+    meshes
         .iter()
         .zip(materials)
         .map(|(mesh, m)| DrawObject {
@@ -151,28 +185,32 @@ pub(super) fn draw(
             fresnel: &m.fresnel,
             view_blur: ViewBlur::default(),
         })
-        .collect();
-    let image = LacquerRenderer::new()
-        .render(
-            gpu,
-            &DrawScene {
-                objects: &objects,
-                camera,
-                lights,
-                environment,
-                environment_model,
-                ray_tracing,
-                background: Background::Transparent,
-            },
-            &RenderSettings {
-                width: size,
-                height: size,
-                samples: 1,
-            },
-        )
-        .unwrap();
-    assert_no_validation_messages(gpu);
-    image
+        .collect()
+}
+
+fn scene<'a>(
+    objects: &'a [DrawObject<'a>],
+    (camera, lights): (&'a Camera, &'a [Light]),
+    (environment, environment_model): (Option<&'a GpuEnvironment>, EnvironmentModel),
+    ray_tracing: Option<RayTracing>,
+) -> DrawScene<'a> {
+    DrawScene {
+        objects,
+        camera,
+        lights,
+        environment,
+        environment_model,
+        ray_tracing,
+        background: Background::Transparent,
+    }
+}
+
+fn settings(size: u32) -> RenderSettings {
+    RenderSettings {
+        width: size,
+        height: size,
+        samples: 1,
+    }
 }
 
 /// `meshes[i]` in `materials[i]` as the CPU twins trace them.
