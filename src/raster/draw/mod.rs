@@ -135,11 +135,7 @@ impl LacquerRenderer {
         settings: &RenderSettings,
     ) -> Result<HdrImage> {
         validate(gpu, scene, settings)?;
-        let meshes: Vec<GpuMesh> = scene
-            .objects
-            .iter()
-            .map(|o| GpuMesh::upload(gpu, o.mesh))
-            .collect::<Result<_>>()?;
+        let meshes = upload_meshes(gpu, scene)?;
         let meshes: Vec<&GpuMesh> = meshes.iter().collect();
         let (image, _) = self.draw(gpu, scene, &meshes, settings, DrawOptions::default())?;
         Ok(image)
@@ -178,11 +174,7 @@ impl LacquerRenderer {
         settings: &RenderSettings,
     ) -> Result<(HdrImage, Option<HdrImage>)> {
         validate(gpu, scene, settings)?;
-        let meshes: Vec<GpuMesh> = scene
-            .objects
-            .iter()
-            .map(|o| GpuMesh::upload(gpu, o.mesh))
-            .collect::<Result<_>>()?;
+        let meshes = upload_meshes(gpu, scene)?;
         let meshes: Vec<&GpuMesh> = meshes.iter().collect();
         let drawn = self.draw_once(gpu, scene, &meshes, settings, DrawOptions::default())?;
         let image = match &drawn.integral {
@@ -288,6 +280,15 @@ impl LacquerRenderer {
             MeshShading::Trivial => draw_forward(&inputs, pipelines, targets, buffers, frame),
         }
     }
+}
+
+/// Each object's mesh uploaded for one draw.
+fn upload_meshes(gpu: &GpuContext, scene: &DrawScene<'_>) -> Result<Vec<GpuMesh>> {
+    scene
+        .objects
+        .iter()
+        .map(|o| GpuMesh::upload(gpu, o.mesh))
+        .collect()
 }
 
 /// `image` with every radiance below 0 raised to 0: what SPEC §6's estimate (unclamped in a
