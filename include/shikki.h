@@ -109,8 +109,9 @@ enum ShikkiEnvModel
  {
   // SPEC §4's paper model: the prefiltered layer picked by β(N·V) (the default).
   SHIKKI_ENV_MODEL_PAPER = 0,
-  // The integral of the BRDF itself over the environment, by a fixed quadrature (32
-  // Beckmann-lobe samples per pixel reading the prefiltered layers).
+  // The integral of the BRDF itself over the environment, by a fixed quadrature of lookups
+  // of the prefiltered layers (a lattice along the plane of incidence for smooth lacquer,
+  // 128 Beckmann-lobe samples for rough).
   SHIKKI_ENV_MODEL_BRDF = 1,
 };
 #ifndef __cplusplus

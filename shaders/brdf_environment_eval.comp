@@ -32,6 +32,6 @@ void main() {
     vec3 n = directions[2u * row + 0u].xyz;
     vec3 v = directions[2u * row + 1u].xyz;
     float nv = dot(n, v);
-    vec3 specular = nv > 0.0 ? brdf_environment_specular(p, n, v, nv) : vec3(0.0);
+    vec3 specular = nv > 0.0 ? brdf_environment_specular(p, n, v, nv, ENV_SAMPLES) : vec3(0.0);
     values[row] = vec4(specular, 0.0);
 }

@@ -74,8 +74,9 @@ pub enum ShikkiBackground {
 pub enum ShikkiEnvModel {
     /// SPEC §4's paper model: the prefiltered layer picked by β(N·V) (the default).
     Paper = 0,
-    /// The integral of the BRDF itself over the environment, by a fixed quadrature (32
-    /// Beckmann-lobe samples per pixel reading the prefiltered layers).
+    /// The integral of the BRDF itself over the environment, by a fixed quadrature of lookups
+    /// of the prefiltered layers (a lattice along the plane of incidence for smooth lacquer,
+    /// 128 Beckmann-lobe samples for rough).
     Brdf = 1,
 }
 

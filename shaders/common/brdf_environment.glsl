@@ -5,10 +5,10 @@
 // Two quadratures of the lookups, picked (or blended) by the material's m: for a narrow lobe
 // (m ≤ 0.1) a lattice of nodes on the plane of incidence, each read at the blur that gives the
 // lobe's width across the plane (`specular_lattice`: one lookup face-on, up to 33 at grazing);
-// for a wide one (m ≥ 0.2) ENV_SAMPLES half vectors from a Fibonacci lattice in the Beckmann
+// for a wide one (m ≥ 0.2) `samples` half vectors from a Fibonacci lattice in the Beckmann
 // lobe, in a frame whose first axis lies in the plane of incidence; each reflected direction s
 // weighs F(acos V·H)·G·(V·H)/(nv·nh) and reads the layers at the β whose lobe covers its share
-// 1/(ENV_SAMPLES·pdf(s)) of the sphere (filtered importance sampling, `specular_fis`). The
+// 1/(samples·pdf(s)) of the sphere (filtered importance sampling, `specular_fis`). The
 // lookups are bilinear by hand from the layers' texels
 // (`env_layer_texels`), with one seam rule written out here and in the twin: a tap beyond its face
 // reads the texel holding the tap's direction on the face that direction selects. The sampler's
@@ -25,7 +25,10 @@
 #include "texel_buffer.glsl"
 layout(set = 0, binding = ENV_LAYER_TEXELS_BINDING) uniform textureBuffer env_layer_texels;
 
-layout(constant_id = ENV_SAMPLES_ID) const int ENV_SAMPLES = 32;
+// Lobe samples of filtered importance sampling where the camera looks and at the paths' hits
+// (brdf_quadrature.rs `BRDF_SAMPLES`, `BRDF_HIT_SAMPLES`).
+layout(constant_id = ENV_SAMPLES_ID) const int ENV_SAMPLES = 128;
+layout(constant_id = ENV_HIT_SAMPLES_ID) const int ENV_HIT_SAMPLES = 32;
 
 // (face, sc, tc) of a direction by the Vulkan face-selection table (src/environment/cube.rs
 // `direction_to_face`; ties go to X, then Y, then Z), and the face's frame: its direction at
@@ -253,14 +256,14 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv) {
 
 // Filtered importance sampling (twin: `specular_quadrature`): the weighted mean of the lookups
 // times the directional albedo A(nv), Σ w·L / Σ w · A(nv), exact in a white furnace at every nv.
-vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv) {
+vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv, int samples) {
     vec3 tangent, bitangent;
     incidence_frame(n, v, nv, tangent, bitangent);
     float m2 = p.beckmann_m * p.beckmann_m;
     vec3 sum = vec3(0.0);
     vec3 weights = vec3(0.0);
-    for (int i = 0; i < ENV_SAMPLES; ++i) {
-        float u = (float(i) + 0.5) / float(ENV_SAMPLES);
+    for (int i = 0; i < samples; ++i) {
+        float u = (float(i) + 0.5) / float(samples);
         // The Fibonacci lattice (twin: `fibonacci_point`).
         float w = fract(float(i) * GOLDEN_FRACTION);
         // u = 1 − exp(−tan²θ_H/m²): the Beckmann lobe's distribution of D·cos θ_H.
@@ -273,9 +276,9 @@ vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv) {
         float vh = dot(v, h);
         if (vh > 0.0) {
             // pdf(s) = D·cos θ_H/(4·V·H) with D = (1 − u)/(π m² cos⁴θ_H); the lookup's lobe
-            // 2πβ² covers 1/(ENV_SAMPLES·pdf).
+            // 2πβ² covers 1/(samples·pdf).
             float pdf = rest / (4.0 * PI * m2 * cos_h * cos_h * cos_h * vh);
-            float beta = sqrt(1.0 / (2.0 * PI * float(ENV_SAMPLES) * pdf));
+            float beta = sqrt(1.0 / (2.0 * PI * float(samples) * pdf));
             add_lookup(p, n, v, nv, h, vh, 1.0, beta, sum, weights);
         }
     }
@@ -284,15 +287,16 @@ vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv) {
 
 // ∫ f_spec(N, V, s)·L(s)·(N·s) dω_s at a surface point (unit n, v; nv = N·V > 0): the bright
 // lights, plus the residual's lookups by the lattice, filtered importance sampling, or both
-// blended, as `lattice_share` says for the material (twin: `brdf_specular`).
-vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
+// blended, as `lattice_share` says for the material, with `samples` lobe samples for filtered
+// importance sampling (twin: `brdf_specular`).
+vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv, int samples) {
     float share = lattice_share(p.beckmann_m);
     vec3 lookups = vec3(0.0);
     if (share > 0.0) {
         lookups += share * specular_lattice(p, n, v, nv);
     }
     if (share < 1.0) {
-        lookups += (1.0 - share) * specular_fis(p, n, v, nv);
+        lookups += (1.0 - share) * specular_fis(p, n, v, nv, samples);
     }
     return lookups + bright_specular(p, n, v, nv);
 }

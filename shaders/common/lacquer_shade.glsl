@@ -15,15 +15,17 @@
 layout(constant_id = ENV_MODEL_ID) const int ENV_MODEL = ENV_MODEL_PAPER;
 
 // view_blur: (β_normal, β_grazing, p) of SPEC §4's β(nv), per material; nv2 = dot_compensated(n, v)
-// and f_diff = view_dependent_diffuse(p, nv2), shared with the lights.
-vec3 environment_light(LacquerParams p, vec3 view_blur, vec3 n, vec3 v, vec2 nv2, vec3 f_diff) {
+// and f_diff = view_dependent_diffuse(p, nv2), shared with the lights; env_samples: the `brdf`
+// model's lobe samples (ENV_SAMPLES where the camera looks, ENV_HIT_SAMPLES at a path's hit).
+vec3 environment_light(LacquerParams p, vec3 view_blur, vec3 n, vec3 v, vec2 nv2, vec3 f_diff,
+    int env_samples) {
     float nv = nv2.x + nv2.y;
     if (nv <= 0.0) {
         return vec3(0.0);
     }
     vec3 specular;
     if (ENV_MODEL == ENV_MODEL_BRDF) {
-        specular = brdf_environment_specular(p, n, v, nv);
+        specular = brdf_environment_specular(p, n, v, nv, env_samples);
     } else {
         vec3 r = 2.0 * nv * n - v;
         float beta = view_blur.y + (view_blur.x - view_blur.y) * pow(min(nv, 1.0), view_blur.z);
@@ -99,9 +101,9 @@ vec3 one_light(LacquerParams p, vec3 position, vec3 n, vec3 v, vec2 nv2, vec3 f_
 
 // Radiance leaving `position` (unit normal n) towards v; `surface`: where its shadow rays start
 // (visibility.glsl; unused without RAY_TRACING). `light_choice` < 0: every light with its own
-// shadow ray; in [0, 1): one of them (`one_light`).
+// shadow ray; in [0, 1): one of them (`one_light`). env_samples: as `environment_light`.
 vec3 lacquer_radiance_towards(LacquerParams p, vec3 view_blur, vec3 position, vec3 n, vec3 v,
-    RaySurface surface, float light_choice) {
+    RaySurface surface, float light_choice, int env_samples) {
     // Light-independent parts of f_r, once per point (see lacquer_brdf_view).
     vec2 nv2 = dot_compensated(n, v);
     vec3 f_diff = view_dependent_diffuse(p, nv2);
@@ -118,7 +120,7 @@ vec3 lacquer_radiance_towards(LacquerParams p, vec3 view_blur, vec3 position, ve
         }
     }
     if (frame.environment.x != 0) {
-        radiance += environment_light(p, view_blur, n, v, nv2, f_diff);
+        radiance += environment_light(p, view_blur, n, v, nv2, f_diff, env_samples);
     }
     return radiance;
 }
@@ -129,7 +131,7 @@ vec3 lacquer_radiance(LacquerParams p, vec3 view_blur, vec3 position, vec3 inter
     RaySurface surface) {
     vec3 n = normalize(interpolated_normal);
     vec3 v = normalize(frame.eye.xyz - position);
-    return lacquer_radiance_towards(p, view_blur, position, n, v, surface, -1.0);
+    return lacquer_radiance_towards(p, view_blur, position, n, v, surface, -1.0, ENV_SAMPLES);
 }
 
 #endif

@@ -136,7 +136,8 @@ vec4 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
             // One shadow ray at the hit, to one light (with shadows on; without, every light
             // unshadowed is exact already).
             float choice = SHADOWS ? light_number(key, uint(i), uint(depth)) : -1.0;
-            vec3 radiance = lacquer_radiance_towards(p, view_blur, position, n, v, surface, choice);
+            vec3 radiance = lacquer_radiance_towards(p, view_blur, position, n, v, surface, choice,
+                ENV_HIT_SAMPLES);
             path += throughput * weight * (radiance - hidden);
             throughput *= weight;
         }

@@ -3,7 +3,7 @@
 //! pairs in a compute shader, so tests can hold it against its CPU twin
 //! (`environment::brdf_quadrature`) number by number.
 
-use crate::environment::brdf_quadrature::{albedo_knots, BRDF_SAMPLES};
+use crate::environment::brdf_quadrature::{albedo_knots, BRDF_HIT_SAMPLES, BRDF_SAMPLES};
 use crate::environment::gpu::GpuEnvironment;
 use crate::gpu::shaders::interface::{
     BrdfEvalParams, DrawConstants, Frame, ObjectMaterial, BACKGROUND_COLOR, BRDF_EVAL_WORKGROUP,
@@ -52,6 +52,7 @@ pub fn brdf_environment_specular_gpu(
         fresnel_pow2_grid: 0,
         env_model: ENV_MODEL_BRDF,
         env_samples: BRDF_SAMPLES,
+        env_hit_samples: BRDF_HIT_SAMPLES,
         shadows: 0,
     };
     let pipeline: ComputePipeline = gpu.create_specialized_compute_pipeline(

@@ -228,12 +228,11 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 /// The renderer's `brdf` specular term (the map's bright lights plus BRDF_SAMPLES lookups of the
 /// residual's layers) against the brute-force integral over the whole map, on the courtyard HDRI
 /// and the disc map, for m = 0.02, 0.05, 0.2, 0.5: the figures of BENCHMARKS.md ("The `brdf`
-/// environment model"). The issue asks for ≤ 1 % mean and ≤ 5 % p99; the disc map is there or
-/// close (the split took the disc out of the lookups: its RMSE went from 4.6–50 % to 0.4–1.1 %),
-/// the courtyard is not (its error is the lookups' aliasing of the buildings' edges, BENCHMARKS.md),
-/// so this test holds the measured error as a bound that catches a regression: each mean at most
-/// 1.25× its measured value (the estimator is deterministic: the same build gives the same
-/// figures).
+/// environment model"). The issue asks for ≤ 1 % mean and ≤ 5 % p99: the disc map meets it at
+/// every m (the split took the disc out of the lookups) and is held to it; the courtyard does not
+/// (its error is the lookups' aliasing of the buildings' edges, BENCHMARKS.md: 2–3 % mean), so
+/// every mean is also held to at most 1.25× its measured value, which catches a regression (the
+/// estimator is deterministic: the same build gives the same figures).
 #[test]
 fn error_at_the_render_sample_count() {
     let courtyard = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/courtyard.hdr");
@@ -246,8 +245,8 @@ fn error_at_the_render_sample_count() {
     let pairs = accuracy_pairs();
     // Measured means (green, relative) per map and m = 0.02, 0.05, 0.2, 0.5; see the doc comment.
     let measured = [
-        [0.0276, 0.0208, 0.1050, 0.0935],
-        [0.0017, 0.0018, 0.0076, 0.0115],
+        [0.0276, 0.0208, 0.0305, 0.0291],
+        [0.0017, 0.0018, 0.0018, 0.0037],
     ];
     for ((name, source), bounds) in maps.iter().zip(measured) {
         let prefilter = PrefilterParams::for_model(source.width, EnvironmentModel::Brdf);
@@ -285,6 +284,9 @@ fn error_at_the_render_sample_count() {
                 mean <= 1.25 * bound,
                 "{name} m {m}: mean {mean}, bound {bound}"
             );
+            if *name == "disc" {
+                assert!(mean <= 0.01 && p99 <= 0.05, "{name} m {m}: {mean}, {p99}");
+            }
         }
     }
 }

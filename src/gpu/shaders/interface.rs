@@ -105,8 +105,10 @@ shader_interface! {
             fresnel_pow2_grid,
             /// `ENV_MODEL_PAPER` or `ENV_MODEL_BRDF` (`ENV_MODEL`).
             env_model,
-            /// The `brdf` model's lobe samples per shaded point (`ENV_SAMPLES`).
+            /// The `brdf` model's lobe samples per point the camera sees (`ENV_SAMPLES`).
             env_samples,
+            /// The same at the hits of the light between objects' paths (`ENV_HIT_SAMPLES`).
+            env_hit_samples,
             /// The ray-traced shading pass traces shadow rays to the lights (`SHADOWS`, a
             /// VkBool32; SPEC §6's vis, else 1).
             shadows,

@@ -4,7 +4,7 @@
 
 use super::frame::DrawBuffers;
 use super::gpu_mesh::{VERTEX_ATTRIBUTES, VERTEX_STRIDE};
-use crate::environment::brdf_quadrature::BRDF_SAMPLES;
+use crate::environment::brdf_quadrature::{BRDF_HIT_SAMPLES, BRDF_SAMPLES};
 use crate::environment::gpu::GpuEnvironment;
 use crate::environment::EnvironmentModel;
 use crate::gpu::shaders::interface::{
@@ -149,6 +149,7 @@ impl PipelineKey {
                 EnvironmentModel::Brdf => ENV_MODEL_BRDF,
             },
             env_samples: BRDF_SAMPLES,
+            env_hit_samples: BRDF_HIT_SAMPLES,
             shadows: u32::from(variant.shadows),
         }
     }
