@@ -110,8 +110,8 @@ enum ShikkiEnvModel
   // SPEC §4's paper model: the prefiltered layer picked by β(N·V) (the default).
   SHIKKI_ENV_MODEL_PAPER = 0,
   // The integral of the BRDF itself over the environment, by a fixed quadrature of lookups
-  // of the prefiltered layers (a lattice along the plane of incidence for smooth lacquer,
-  // 128 Beckmann-lobe samples for rough).
+  // of the prefiltered layers (a lattice along the plane of incidence for smooth lacquer, a
+  // deconvolved grid of Beckmann slopes for rough, 128 Beckmann-lobe samples for rougher).
   SHIKKI_ENV_MODEL_BRDF = 1,
 };
 #ifndef __cplusplus

@@ -75,8 +75,8 @@ pub enum ShikkiEnvModel {
     /// SPEC §4's paper model: the prefiltered layer picked by β(N·V) (the default).
     Paper = 0,
     /// The integral of the BRDF itself over the environment, by a fixed quadrature of lookups
-    /// of the prefiltered layers (a lattice along the plane of incidence for smooth lacquer,
-    /// 128 Beckmann-lobe samples for rough).
+    /// of the prefiltered layers (a lattice along the plane of incidence for smooth lacquer, a
+    /// deconvolved grid of Beckmann slopes for rough, 128 Beckmann-lobe samples for rougher).
     Brdf = 1,
 }
 

@@ -2,10 +2,12 @@
 // quadrature. The CPU twin is src/environment/brdf_quadrature.rs: change both together, formula by
 // formula.
 //
-// Two quadratures of the lookups, picked (or blended) by the material's m: for a narrow lobe
-// (m ≤ 0.1) a lattice of nodes on the plane of incidence, each read at the blur that gives the
-// lobe's width across the plane (`specular_lattice`: one lookup face-on, up to 33 at grazing);
-// for a wide one (m ≥ 0.2) `samples` half vectors from a Fibonacci lattice in the Beckmann
+// Three quadratures of the lookups, picked (or two blended) by the material's m: for a narrow
+// lobe (m ≤ 0.06) a lattice of nodes on the plane of incidence, each read at the blur that gives
+// the lobe's width across the plane (`specular_lattice`: one lookup face-on, up to 33 at
+// grazing); for a middling one (0.07 ≤ m ≤ 0.22, the rough preset) a grid of slopes from the
+// lobe's Gaussian less the lookups' blur (`specular_grid`, ~100 lookups); for a wide one
+// (m ≥ 0.3) `samples` half vectors from a Fibonacci lattice in the Beckmann
 // lobe, in a frame whose first axis lies in the plane of incidence; each reflected direction s
 // weighs F(acos V·H)·G·(V·H)/(nv·nh) and reads the layers at the β whose lobe covers its share
 // 1/(samples·pdf(s)) of the sphere (filtered importance sampling, `specular_fis`). The
@@ -211,11 +213,14 @@ void incidence_frame(vec3 n, vec3 v, float nv, out vec3 tangent, out vec3 bitang
     bitangent = cross(n, tangent);
 }
 
-// The lattice's share of the lookups for roughness m: 1 up to m_lo, 0 from m_hi (twin:
-// `lattice_share`).
-float lattice_share(float m) {
-    vec2 band = frame.env_lattice_band.xy;
-    return clamp((band.y - m) / (band.y - band.x), 0.0, 1.0);
+// Each quadrature's share of the lookups for roughness m: (lattice, grid, filtered importance
+// sampling); at a path's hit (camera false) filtered importance sampling takes the grid's share
+// (twin: `quadrature_shares`).
+vec3 quadrature_shares(float m, bool camera) {
+    vec4 band = frame.env_lattice_band;
+    float lattice = clamp((band.y - m) / (band.y - band.x), 0.0, 1.0);
+    float fis = clamp((m - band.z) / (band.w - band.z), 0.0, 1.0);
+    return camera ? vec3(lattice, 1.0 - lattice - fis, fis) : vec3(lattice, 0.0, 1.0 - lattice);
 }
 
 // 1 inside the reach, a smoothstep to 0 over its last `taper` share (twin: `lattice_taper`).
@@ -254,6 +259,58 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv) {
     return normalized_lookups(p, nv, sum, weights);
 }
 
+// The blur of the grid's node at slopes (x, y) with half vector h (twin: `node_blur`, which
+// derives it): β scaled by the geometric mean of the reflection's Jacobian there against its
+// value at the centre (2 along the plane, 2·nv across).
+float node_blur(vec3 v, vec3 h, vec3 tangent, vec3 bitangent, float x, float y, float beta,
+    float nv) {
+    float inv_len = inversesqrt(1.0 + x * x + y * y);
+    float vh = dot(v, h);
+    vec3 dh_x = (tangent - h * dot(h, tangent)) * inv_len;
+    vec3 dh_y = (bitangent - h * dot(h, bitangent)) * inv_len;
+    float j_x = 2.0 * sqrt(dot(v, dh_x) * dot(v, dh_x) + vh * vh * dot(dh_x, dh_x));
+    float j_y = 2.0 * sqrt(dot(v, dh_y) * dot(v, dh_y) + vh * vh * dot(dh_y, dh_y));
+    return beta * sqrt(j_x * j_y / (4.0 * nv));
+}
+
+// The wider-lobe quadrature (twin: `specular_grid`, whose doc derives it): a grid of Beckmann
+// slopes from the lobe's Gaussian less the lookups' blur, each read at its node's blur.
+vec3 specular_grid(LacquerParams p, vec3 n, vec3 v, float nv) {
+    vec3 tangent, bitangent;
+    incidence_frame(n, v, nv, tangent, bitangent);
+    float share = frame.env_grid.x;
+    float spacing = frame.env_grid.y;
+    float reach = frame.env_grid.z;
+    float sigma = p.beckmann_m * 0.70710678;
+    float beta = 2.0 * nv * sigma * share;
+    float var_along = sigma * sigma - (0.5 * beta) * (0.5 * beta);
+    float var_across = sigma * sigma - (0.5 * beta / nv) * (0.5 * beta / nv);
+    float step_across = spacing * 0.5 * beta / nv;
+    float step_along = max(spacing * 0.5 * beta, reach * sqrt(var_along) / frame.env_grid.w);
+    int half_along = int(ceil(reach * sqrt(var_along) / step_along));
+    int half_across = int(ceil(reach * sqrt(var_across) / step_across));
+    vec3 sum = vec3(0.0);
+    vec3 weights = vec3(0.0);
+    for (int i = -half_along; i <= half_along; ++i) {
+        for (int j = -half_across; j <= half_across; ++j) {
+            float x = float(i) * step_along;
+            float y = float(j) * step_across;
+            float r = sqrt(x * x / var_along + y * y / var_across);
+            if (r >= reach) {
+                continue;
+            }
+            float scale = exp(-0.5 * r * r) * lattice_taper(r / reach);
+            vec3 h = normalize(n + tangent * x + bitangent * y);
+            float vh = dot(v, h);
+            if (vh > 0.0) {
+                float blur = node_blur(v, h, tangent, bitangent, x, y, beta, nv);
+                add_lookup(p, n, v, nv, h, vh, scale, blur, sum, weights);
+            }
+        }
+    }
+    return normalized_lookups(p, nv, sum, weights);
+}
+
 // Filtered importance sampling (twin: `specular_quadrature`): the weighted mean of the lookups
 // times the directional albedo A(nv), Σ w·L / Σ w · A(nv), exact in a white furnace at every nv.
 vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv, int samples) {
@@ -286,17 +343,21 @@ vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv, int samples) {
 }
 
 // ∫ f_spec(N, V, s)·L(s)·(N·s) dω_s at a surface point (unit n, v; nv = N·V > 0): the bright
-// lights, plus the residual's lookups by the lattice, filtered importance sampling, or both
-// blended, as `lattice_share` says for the material, with `samples` lobe samples for filtered
-// importance sampling (twin: `brdf_specular`).
+// lights, plus the residual's lookups by the lattice, the grid, filtered importance sampling, or
+// two of them blended, as `quadrature_shares` says for the material, with `samples` lobe samples
+// for filtered importance sampling; the grid serves the points the camera sees (samples ≥
+// ENV_SAMPLES), not a path's hits (twin: `brdf_specular`).
 vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv, int samples) {
-    float share = lattice_share(p.beckmann_m);
+    vec3 shares = quadrature_shares(p.beckmann_m, samples >= ENV_SAMPLES);
     vec3 lookups = vec3(0.0);
-    if (share > 0.0) {
-        lookups += share * specular_lattice(p, n, v, nv);
+    if (shares.x > 0.0) {
+        lookups += shares.x * specular_lattice(p, n, v, nv);
     }
-    if (share < 1.0) {
-        lookups += (1.0 - share) * specular_fis(p, n, v, nv, samples);
+    if (shares.y > 0.0) {
+        lookups += shares.y * specular_grid(p, n, v, nv);
+    }
+    if (shares.z > 0.0) {
+        lookups += shares.z * specular_fis(p, n, v, nv, samples);
     }
     return lookups + bright_specular(p, n, v, nv);
 }

@@ -196,22 +196,44 @@ impl LookupSums {
 
 /// The plane-of-incidence lattice (`specular_lattice`): node spacing in units of the lookup
 /// blur, reach in standard deviations of the nodes' distribution, most nodes on each side of the
-/// mirror direction; and the roughness band over which the `brdf` model passes from the lattice
-/// (m ≤ `LATTICE_M_LO`) to filtered importance sampling (m ≥ `LATTICE_M_HI`), blending linearly
-/// in m between. Measured in BENCHMARKS.md ("The `brdf` environment model"); packed into
+/// mirror direction. Measured in BENCHMARKS.md ("The `brdf` environment model"); packed into
 /// `Frame::env_lattice` for the shaders.
 pub const LATTICE_SPACING: f64 = 2.0;
 pub const LATTICE_REACH: f64 = 2.5;
 pub const LATTICE_MAX_HALF: u32 = 16;
-pub const LATTICE_M_LO: f64 = 0.1;
-pub const LATTICE_M_HI: f64 = 0.2;
-/// The share of the reach over which the node weights fall to 0 ([`lattice_taper`]).
+/// The share of the reach over which the node weights fall to 0 ([`lattice_taper`]; the lattice
+/// and the grid).
 pub const LATTICE_TAPER: f64 = 0.2;
+/// The roughness bands of the hand-overs (`Frame::env_lattice_band`): the lattice alone up to
+/// `LATTICE_M_LO`, then blended linearly in m into the grid, alone from `LATTICE_M_HI`; the grid
+/// blended into filtered importance sampling from `FIS_M_LO`, which is alone from `FIS_M_HI`.
+/// Measured in BENCHMARKS.md: the smooth preset (m = 0.05) keeps the lattice and its cost, the
+/// rough one (0.2) gets the grid, m = 0.5 filtered importance sampling.
+pub const LATTICE_M_LO: f64 = 0.06;
+pub const LATTICE_M_HI: f64 = 0.07;
+pub const FIS_M_LO: f64 = 0.22;
+pub const FIS_M_HI: f64 = 0.3;
+/// The deconvolved slope grid (`specular_grid`): t, the share of the lobe's width across the
+/// plane of incidence that the lookups' blur supplies; the node spacing in units of the blur; the
+/// reach in standard deviations of the nodes' distribution; most nodes on each side along the
+/// plane. Measured in BENCHMARKS.md; packed into `Frame::env_grid`.
+pub const GRID_BLUR_SHARE: f64 = 0.45;
+pub const GRID_SPACING: f64 = 1.7;
+pub const GRID_REACH: f64 = 3.6;
+pub const GRID_MAX_HALF: u32 = 32;
 
-/// The lattice's share of the `brdf` model's lookups for roughness m (1 up to `LATTICE_M_LO`,
-/// 0 from `LATTICE_M_HI`), the rest going to filtered importance sampling.
-pub fn lattice_share(m: f64) -> f64 {
-    ((LATTICE_M_HI - m) / (LATTICE_M_HI - LATTICE_M_LO)).clamp(0.0, 1.0)
+/// Each quadrature's share of the `brdf` model's lookups for roughness m (lattice, grid,
+/// filtered importance sampling; they sum to 1). `camera`: the point the camera sees; at a
+/// path's hit (false) filtered importance sampling with its few samples takes the grid's share,
+/// since every ray would pay the grid's ~100 lookups and the path's own noise is larger than
+/// either quadrature's error.
+pub fn quadrature_shares(m: f64, camera: bool) -> [f64; 3] {
+    let lattice = ((LATTICE_M_HI - m) / (LATTICE_M_HI - LATTICE_M_LO)).clamp(0.0, 1.0);
+    let fis = ((m - FIS_M_LO) / (FIS_M_HI - FIS_M_LO)).clamp(0.0, 1.0);
+    match camera {
+        true => [lattice, 1.0 - lattice - fis, fis],
+        false => [lattice, 0.0, 1.0 - lattice],
+    }
 }
 
 /// The node weights' taper over the last `LATTICE_TAPER` of the reach (x = |p| / reach): 1 inside, a
@@ -261,6 +283,80 @@ pub fn specular_lattice(
     sums.normalized(albedo, nv)
 }
 
+/// The specular part of the `brdf` model for a wider lobe, by a grid of Beckmann slopes whose
+/// Gaussian is the lobe's less the lookups' blur (a deconvolution). The integral is the mean over
+/// the slope distribution (Gaussian, σ² = m²/2 per axis) of F·G·(V·H)/(nv·nh)·L(s). A lookup
+/// blurred by β in directions is, near the mirror direction, a slope blur of β/2 along the plane
+/// of incidence and β/(2·nv) across it (the reflection's Jacobian: 2 and 2·nv), so nodes drawn
+/// from a Gaussian of variances σ² − (β/2)² and σ² − (β/(2nv))², each read at β, sum to the lobe
+/// with the blur's width restored instead of added (filtered importance sampling adds it). β =
+/// `GRID_BLUR_SHARE`·2·nv·σ; the nodes lie on a regular grid `GRID_SPACING`·β apart in
+/// directions (no ripple from a grid that fine under a Gaussian that wide), out to `GRID_REACH`
+/// deviations, tapered like the lattice. Away from the mirror direction the Jacobian changes, so
+/// each node reads the blur that is the same slope blur there: β scaled by the geometric mean of
+/// its Jacobian's two axes against theirs at the centre ([`node_blur`]). Normalised by A(nv) like
+/// [`specular_quadrature`].
+pub fn specular_grid(
+    env: &PrefilteredEnvironment,
+    (brdf, fresnel, albedo): (&BrdfParams, &FresnelTable, &[[f32; 4]]),
+    n: DVec3,
+    v: DVec3,
+) -> [f64; 3] {
+    let nv = n.dot(v);
+    if nv.is_nan() || nv <= 0.0 {
+        return [0.0; 3];
+    }
+    let (tangent, bitangent) = incidence_frame(n, v, nv);
+    let sigma = brdf.beckmann_m / std::f64::consts::SQRT_2;
+    let beta = 2.0 * nv * sigma * GRID_BLUR_SHARE;
+    // The nodes' variances along and across the plane: the lobe's less the lookups' blur.
+    let var_along = sigma * sigma - (0.5 * beta).powi(2);
+    let var_across = sigma * sigma - (0.5 * beta / nv).powi(2);
+    let step_across = GRID_SPACING * 0.5 * beta / nv;
+    let step_along =
+        (GRID_SPACING * 0.5 * beta).max(GRID_REACH * var_along.sqrt() / f64::from(GRID_MAX_HALF));
+    let half_along = (GRID_REACH * var_along.sqrt() / step_along).ceil() as i32;
+    let half_across = (GRID_REACH * var_across.sqrt() / step_across).ceil() as i32;
+    let mut sums = LookupSums::default();
+    for i in -half_along..=half_along {
+        for j in -half_across..=half_across {
+            let (x, y) = (f64::from(i) * step_along, f64::from(j) * step_across);
+            let r = (x * x / var_along + y * y / var_across).sqrt();
+            if r >= GRID_REACH {
+                continue;
+            }
+            let scale = (-0.5 * r * r).exp() * lattice_taper(r / GRID_REACH);
+            let h = (n + tangent * x + bitangent * y).normalize();
+            let vh = v.dot(h);
+            if vh > 0.0 {
+                let blur = node_blur(v, h, (tangent, bitangent), (x, y), beta, nv);
+                sums.add(env, fresnel, (n, v, nv), h, scale, |_| blur);
+            }
+        }
+    }
+    sums.normalized(albedo, nv)
+}
+
+/// The blur of the grid's node at slopes (x, y), half vector h = normalize(n + x·tangent +
+/// y·bitangent): β·√(J_x·J_y / (2·2·nv)), J the lengths of ∂s/∂x and ∂s/∂y (2 and 2·nv at the
+/// centre). With ∂h = (a − h·(h·a))/√(1 + x² + y²) for axis a, ∂s = 2·((V·∂h)·h + (V·H)·∂h), and ∂h ⊥ h.
+fn node_blur(
+    v: DVec3,
+    h: DVec3,
+    (tangent, bitangent): (DVec3, DVec3),
+    (x, y): (f64, f64),
+    beta: f64,
+    nv: f64,
+) -> f64 {
+    let inv_len = 1.0 / (1.0 + x * x + y * y).sqrt();
+    let vh = v.dot(h);
+    let jacobian = |axis: DVec3| {
+        let dh = (axis - h * h.dot(axis)) * inv_len;
+        2.0 * (v.dot(dh).powi(2) + vh * vh * dh.length_squared()).sqrt()
+    };
+    beta * (jacobian(tangent) * jacobian(bitangent) / (4.0 * nv)).sqrt()
+}
+
 /// The frame of the plane of incidence: the tangent towards V's projection (any axis at normal
 /// incidence, where the pattern's orientation does not matter), and N × tangent.
 fn incidence_frame(n: DVec3, v: DVec3, nv: f64) -> (DVec3, DVec3) {
@@ -296,8 +392,10 @@ pub fn bright_specular(
 
 /// The `brdf` model's specular term as the renderer computes it: the bright lights plus the
 /// lookups of the residual's layers (`sources` from the map's bright split; a map without bright
-/// parts is its own residual, with no lights) by the lattice, filtered importance sampling with
-/// `samples` samples, or both blended, as [`lattice_share`] says for the material's m.
+/// parts is its own residual, with no lights) by the lattice, the grid, filtered importance
+/// sampling with `samples` samples, or two of them blended, as [`quadrature_shares`] says for the
+/// material's m. The grid serves the points the camera sees (`samples` ≥ `BRDF_SAMPLES`); with
+/// fewer samples (a path's hit) filtered importance sampling takes its share.
 pub fn brdf_specular(
     (residual, lights): (&PrefilteredEnvironment, &[BrightLight]),
     samples: u32,
@@ -305,16 +403,21 @@ pub fn brdf_specular(
     n: DVec3,
     v: DVec3,
 ) -> [f64; 3] {
-    let share = lattice_share(material.0.beckmann_m);
-    let lattice = match share > 0.0 {
-        true => specular_lattice(residual, material, n, v),
-        false => [0.0; 3],
+    let shares = quadrature_shares(material.0.beckmann_m, samples >= BRDF_SAMPLES);
+    let mut lookups = [0.0; 3];
+    let mut add = |share: f64, quadrature: &dyn Fn() -> [f64; 3]| {
+        if share > 0.0 {
+            let value = quadrature();
+            for c in 0..3 {
+                lookups[c] += share * value[c];
+            }
+        }
     };
-    let fis = match share < 1.0 {
-        true => specular_quadrature(residual, samples, material, n, v),
-        false => [0.0; 3],
-    };
-    let lookups: [f64; 3] = std::array::from_fn(|c| share * lattice[c] + (1.0 - share) * fis[c]);
+    add(shares[0], &|| specular_lattice(residual, material, n, v));
+    add(shares[1], &|| specular_grid(residual, material, n, v));
+    add(shares[2], &|| {
+        specular_quadrature(residual, samples, material, n, v)
+    });
     let bright = bright_specular(lights, material.0, material.1, n, v);
     std::array::from_fn(|c| lookups[c] + bright[c])
 }

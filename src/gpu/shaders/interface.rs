@@ -197,10 +197,13 @@ shader_interface! {
             env_light_direction: [vec4; MAX_ENV_LIGHTS],
             env_light_irradiance: [vec4; MAX_ENV_LIGHTS],
             /// The `brdf` model's plane-of-incidence lattice (environment/brdf_quadrature.rs
-            /// `LATTICE_*`): spacing, reach, taper, most nodes on each side; and the roughness
-            /// band (m_lo, m_hi) over which it hands over to filtered importance sampling.
+            /// `LATTICE_*`): spacing, reach, taper, most nodes on each side; the roughness bands
+            /// (m_lo, m_hi) over which it hands over to the grid, and the grid to filtered
+            /// importance sampling (`LATTICE_M_*`, `FIS_M_*`); and the deconvolved slope grid
+            /// (`GRID_*`): blur share t, spacing, reach, most nodes on each side along the plane.
             env_lattice: vec4,
             env_lattice_band: vec4,
+            env_grid: vec4,
         }
 
         /// Step 1's push constants (equirect_to_cube*.comp).

@@ -116,7 +116,8 @@ impl Frame {
         }
     }
 
-    /// Packs the `brdf` model's quadrature constants (the lattice's, from brdf_quadrature.rs);
+    /// Packs the `brdf` model's quadrature constants (the lattice's and the grid's and their
+    /// roughness bands, from brdf_quadrature.rs);
     /// also used by the compute evaluator.
     pub(crate) fn set_brdf_quadrature(&mut self) {
         use crate::environment::brdf_quadrature as q;
@@ -126,7 +127,18 @@ impl Frame {
             q::LATTICE_TAPER as f32,
             q::LATTICE_MAX_HALF as f32,
         ];
-        self.env_lattice_band = [q::LATTICE_M_LO as f32, q::LATTICE_M_HI as f32, 0.0, 0.0];
+        self.env_lattice_band = [
+            q::LATTICE_M_LO as f32,
+            q::LATTICE_M_HI as f32,
+            q::FIS_M_LO as f32,
+            q::FIS_M_HI as f32,
+        ];
+        self.env_grid = [
+            q::GRID_BLUR_SHARE as f32,
+            q::GRID_SPACING as f32,
+            q::GRID_REACH as f32,
+            q::GRID_MAX_HALF as f32,
+        ];
     }
 
     /// Packs the `brdf` model's bright lights (at most `MAX_ENV_LIGHTS`, which
