@@ -111,6 +111,7 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<RenderBench> {
                 DrawOptions {
                     shading,
                     timed: true,
+                    ..DrawOptions::default()
                 },
             )?;
             let seconds = start.elapsed().as_secs_f64();
@@ -168,6 +169,7 @@ fn models(
             let options = DrawOptions {
                 shading: MeshShading::Lacquer,
                 timed: true,
+                ..DrawOptions::default()
             };
             let (_, timings) = renderer.render_with(gpu, &scene, options)?;
             let Some(t) = timings else { continue };

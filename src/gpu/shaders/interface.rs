@@ -35,6 +35,9 @@ shader_interface! {
         PREFILTER_WORKGROUP: u32 = 8;
         /// `local_size_x` of brdf_eval.comp (one invocation per direction triple).
         BRDF_EVAL_WORKGROUP: u32 = 64;
+        /// `local_size_x` = `local_size_y` of the denoise's steps (denoise_guide.comp,
+        /// denoise_filter.comp: one invocation per pixel, 8 × 8 tiles).
+        DENOISE_WORKGROUP: u32 = 8;
 
         /// The draw's set 0: the `Frame` uniform block.
         FRAME_BINDING: u32 = 0;
@@ -70,6 +73,11 @@ shader_interface! {
         BRDF_EVAL_PARAMS_BINDING: u32 = 0;
         BRDF_EVAL_DIRECTIONS_BINDING: u32 = 2;
         BRDF_EVAL_VALUES_BINDING: u32 = 3;
+        /// The denoise's set 0 (raster/draw/denoise.rs): the draw's image (read, then filtered
+        /// in place), its integral image, and the guide the first step writes for the second.
+        DENOISE_IMAGE_BINDING: u32 = 0;
+        DENOISE_INTEGRAL_BINDING: u32 = 1;
+        DENOISE_GUIDE_BINDING: u32 = 2;
         /// brdf_environment_eval.comp's set 0, beside the draw's frame (`FRAME_BINDING`), Fresnel
         /// knots (`FRESNEL_KNOTS_BINDING`) and layer texels (`ENV_LAYER_TEXELS_BINDING`).
         ENV_EVAL_PARAMS_BINDING: u32 = 8;
@@ -232,6 +240,16 @@ shader_interface! {
         struct DownsampleParams: push_constant {
             /// The face size written (half the one read).
             dst_face_size: uint,
+        }
+
+        /// The denoise's push constants (raster/draw/denoise.rs `DenoiseParams::new`, the host
+        /// filter's constants).
+        struct DenoiseParams: push_constant {
+            /// Width, height, the filter's radius in pixels, 0.
+            size: uvec4,
+            /// 1/(2σ²) of the spatial Gaussian; 1/(2·tolerance²) of the guide; 2·k² of the
+            /// estimate's edge test; the largest −ln w a neighbour keeps.
+            weights: vec4,
         }
 
         /// Step 3's push constants (prefilter_layers.comp).

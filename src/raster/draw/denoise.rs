@@ -18,8 +18,23 @@
 //! no state between draws). σ shrinks as 1/√rays, so the error against the converged integral
 //! still falls as `rays` grows: from 256 rays on the filter is off and the image is the draw
 //! itself. Where the integral is 0 (nothing to meet) the output is the draw bit for bit.
+//!
+//! It runs on the device ([`DenoisePass`]: denoise_guide.comp, then denoise_filter.comp, over the
+//! draw's readback buffers, the image filtered in place) so that a GPU's draw does not wait for a
+//! host loop over every pixel (0.5 s at 1024², 8 rays, on one core); [`denoise`] is its CPU twin,
+//! both driven by [`denoise_params`], and the host path where the image does not fit the
+//! device's storage-buffer range.
 
+use crate::gpu::shaders::interface::{
+    DenoiseParams, DENOISE_GUIDE_BINDING, DENOISE_IMAGE_BINDING, DENOISE_INTEGRAL_BINDING,
+    DENOISE_WORKGROUP,
+};
+use crate::gpu::{
+    Access, Binding, BindingKind, Buffer, BufferDesc, BufferUsage, ComputePipeline, GpuContext,
+    Resource,
+};
 use crate::output::HdrImage;
+use crate::Result;
 
 /// σ of the spatial Gaussian at 8 rays, in pixels; at other counts σ = this · √(8/rays).
 /// Measured in BENCHMARKS.md ("Light between objects").
@@ -41,6 +56,23 @@ pub fn denoise_sigma(rays: u32) -> Option<f64> {
 
 /// −ln of the smallest weight a neighbour keeps.
 const MAX_EXPONENT: f32 = 20.0;
+
+/// The filter's constants for a `width` × `height` image at `sigma` pixels, as both the host
+/// filter and the shaders read them: the radius 2σ (rounded up), 1/(2σ²), the guide's
+/// 1/(2·tolerance²) (the tolerance doubled: a difference of logs is twice the relative one),
+/// 2·k², and the largest −ln w kept.
+pub fn denoise_params(width: u32, height: u32, sigma: f64) -> DenoiseParams {
+    let tolerance = 2.0 * DENOISE_GUIDE_TOLERANCE as f32;
+    DenoiseParams {
+        size: [width, height, (2.0 * sigma).ceil() as u32, 0],
+        weights: [
+            (1.0 / (2.0 * sigma * sigma)) as f32,
+            1.0 / (2.0 * tolerance * tolerance),
+            2.0 * (DENOISE_NOISE_TOLERANCE * DENOISE_NOISE_TOLERANCE) as f32,
+            MAX_EXPONENT,
+        ],
+    }
+}
 
 /// What the filter reads of a covered pixel.
 struct Pixel {
@@ -78,10 +110,12 @@ pub fn denoise(image: &HdrImage, integral: &HdrImage, sigma: f64) -> HdrImage {
     if width == 0 {
         return image.clone();
     }
-    let radius = (2.0 * sigma).ceil() as usize;
+    let params = denoise_params(image.width, image.height, sigma);
+    let radius = params.size[2] as usize;
+    let [spatial_scale, inv_tolerance2, noise_tolerance2, max_exponent] = params.weights;
     // −ln of the spatial Gaussian by distance along one axis.
     let spatial: Vec<f32> = (0..=radius)
-        .map(|d| ((d * d) as f64 / (2.0 * sigma * sigma)) as f32)
+        .map(|d| (d * d) as f32 * spatial_scale)
         .collect();
     let covered = |i: usize| integral.pixels[i][3] >= 0.0;
     // The variance's 3×3 mean over covered pixels: one pixel's few rays estimate it poorly.
@@ -99,12 +133,9 @@ pub fn denoise(image: &HdrImage, integral: &HdrImage, sigma: f64) -> HdrImage {
         }
         sum / count.max(1.0)
     };
-    let noise_tolerance2 = 2.0 * (DENOISE_NOISE_TOLERANCE * DENOISE_NOISE_TOLERANCE) as f32;
     let pixels: Vec<Option<Pixel>> = (0..image.pixels.len())
         .map(|i| covered(i).then(|| Pixel::new(&image.pixels[i], &integral.pixels[i], variance(i))))
         .collect();
-    let tolerance = 2.0 * DENOISE_GUIDE_TOLERANCE as f32;
-    let inv_tolerance2 = 1.0 / (2.0 * tolerance * tolerance);
     let mut out = image.clone();
     let filter_row = |y: usize, row: &mut [[f32; 4]]| {
         let rows = y.saturating_sub(radius)..(y + radius + 1).min(height);
@@ -136,7 +167,7 @@ pub fn denoise(image: &HdrImage, integral: &HdrImage, sigma: f64) -> HdrImage {
                         + spatial[qx.abs_diff(x)]
                         + difference * inv_tolerance2
                         + from_estimate;
-                    if exponent > MAX_EXPONENT {
+                    if exponent > max_exponent {
                         continue;
                     }
                     let w = (-exponent).exp();
@@ -159,6 +190,106 @@ pub fn denoise(image: &HdrImage, integral: &HdrImage, sigma: f64) -> HdrImage {
         filter_row(y, row);
     }
     out
+}
+
+/// The bindings of both steps (one layout): image, integral image, guide.
+const BINDINGS: [Binding; 3] = [
+    Binding::new(DENOISE_IMAGE_BINDING, BindingKind::StorageBuffer),
+    Binding::new(DENOISE_INTEGRAL_BINDING, BindingKind::StorageBuffer),
+    Binding::new(DENOISE_GUIDE_BINDING, BindingKind::StorageBuffer),
+];
+
+/// The denoise on the device, the twin of [`denoise`]: its two pipelines, made once, and the
+/// guide buffer of the last image size.
+pub(crate) struct DenoisePass {
+    guide: ComputePipeline,
+    filter: ComputePipeline,
+    guide_buffer: Option<Buffer>,
+}
+
+impl DenoisePass {
+    pub fn new(gpu: &GpuContext) -> Result<Self> {
+        use crate::gpu::shaders::{DENOISE_FILTER_COMP, DENOISE_GUIDE_COMP};
+        let push = std::mem::size_of::<DenoiseParams>() as u32;
+        Ok(DenoisePass {
+            guide: gpu.create_compute_pipeline(
+                "denoise_guide.comp",
+                DENOISE_GUIDE_COMP,
+                &BINDINGS,
+                push,
+            )?,
+            filter: gpu.create_compute_pipeline(
+                "denoise_filter.comp",
+                DENOISE_FILTER_COMP,
+                &BINDINGS,
+                push,
+            )?,
+            guide_buffer: None,
+        })
+    }
+
+    /// Whether a `width` × `height` RGBA32F image fits one storage-buffer binding of `gpu`
+    /// (otherwise the host filters it).
+    pub fn fits(gpu: &GpuContext, width: u32, height: u32) -> bool {
+        image_bytes(width, height) <= u64::from(gpu.info().max_storage_buffer_range)
+    }
+
+    /// Filters `image` (a draw's readback buffer, unclamped) in place with its `integral` image
+    /// (the same size), as [`denoise`] does on the host; both buffers were last written by the
+    /// strips' copy-outs. Submits and waits; the image is then ready for the host to read.
+    pub fn run(
+        &mut self,
+        gpu: &GpuContext,
+        (image, integral): (&Buffer, &Buffer),
+        params: &DenoiseParams,
+    ) -> Result<()> {
+        let (width, height) = (params.size[0], params.size[1]);
+        let bytes = image_bytes(width, height);
+        if self.guide_buffer.as_ref().map(Buffer::size) != Some(bytes) {
+            self.guide_buffer = None;
+            self.guide_buffer = Some(gpu.create_buffer(BufferDesc::device_local(
+                "denoise guide",
+                bytes,
+                BufferUsage::STORAGE,
+            ))?);
+        }
+        let Some(guide) = self.guide_buffer.as_ref() else {
+            return Ok(());
+        };
+        let resources = [
+            (DENOISE_IMAGE_BINDING, Resource::Buffer(image)),
+            (DENOISE_INTEGRAL_BINDING, Resource::Buffer(integral)),
+            (DENOISE_GUIDE_BINDING, Resource::Buffer(guide)),
+        ];
+        let guide_set = gpu.create_descriptor_set(self.guide.layout(), &resources)?;
+        let filter_set = gpu.create_descriptor_set(self.filter.layout(), &resources)?;
+        let groups = (
+            width.div_ceil(DENOISE_WORKGROUP),
+            height.div_ceil(DENOISE_WORKGROUP),
+        );
+        let constants = bytemuck::bytes_of(params);
+        gpu.submit_and_wait(|rec| {
+            // The copy-outs wrote both images (read by both steps, the image written by the
+            // second); the last denoise read and wrote the guide.
+            rec.memory_barrier(Access::TransferWrite, Access::ComputeShaderRead);
+            rec.memory_barrier(Access::TransferWrite, Access::ComputeShaderWrite);
+            rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderWrite);
+            rec.bind_compute(&self.guide, &guide_set);
+            rec.push_constants(&self.guide, constants);
+            rec.dispatch(groups.0, groups.1, 1);
+            rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
+            rec.bind_compute(&self.filter, &filter_set);
+            rec.push_constants(&self.filter, constants);
+            rec.dispatch(groups.0, groups.1, 1);
+            rec.memory_barrier(Access::ComputeShaderWrite, Access::HostRead);
+            Ok(())
+        })?;
+        Ok(())
+    }
+}
+
+fn image_bytes(width: u32, height: u32) -> u64 {
+    u64::from(width) * u64::from(height) * 16
 }
 
 #[cfg(test)]

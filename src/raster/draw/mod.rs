@@ -14,7 +14,9 @@
 //!   │ copy-out       the strip's rows → the readback buffer → host                            │
 //!   └─────────────────────────────────────────────────────────────────────────────────────────┘
 //!  denoise         with rays traced and `RayTracing::denoise`: the integral image the shading
-//!                  pass wrote beside the image, filtered on the host (denoise.rs)
+//!                  pass wrote beside the image, filtered on the device in the readback buffer
+//!                  (denoise.rs: denoise_guide.comp, denoise_filter.comp; the host twin where
+//!                  the image exceeds a storage buffer, or when `DrawOptions::denoise_on_host`)
 //! ```
 //!
 //! That gives what forward shading and an MSAA resolve give, without llvmpipe shading whole 4×4
@@ -57,7 +59,7 @@ use crate::gpu::{
 use crate::output::HdrImage;
 use crate::raster::camera::PixelRect;
 use crate::{Error, Result};
-use denoise::{denoise, denoise_sigma};
+use denoise::{denoise, denoise_params, denoise_sigma, DenoisePass};
 use frame::{fresnel_knots, DrawBuffers};
 use passes::{
     record_deferred, record_forward, strips, timings_from, DeferredPasses, DrawnMesh,
@@ -90,6 +92,8 @@ struct Resources {
     timestamps: Option<TimestampPool>,
     /// Each material's directional-albedo knots (the `brdf` model), computed once.
     albedo_cache: AlbedoCache,
+    /// Made by the first draw denoised on the device.
+    denoise: Option<DenoisePass>,
 }
 
 impl Resources {
@@ -100,6 +104,7 @@ impl Resources {
             black_environment: None,
             timestamps: None,
             albedo_cache: AlbedoCache::default(),
+            denoise: None,
         })
     }
 }
@@ -176,7 +181,7 @@ impl LacquerRenderer {
         validate(gpu, scene, settings)?;
         let meshes = upload_meshes(gpu, scene)?;
         let meshes: Vec<&GpuMesh> = meshes.iter().collect();
-        let drawn = self.draw_once(gpu, scene, &meshes, settings, DrawOptions::default())?;
+        let drawn = self.draw_once(gpu, scene, &meshes, settings, DrawOptions::default(), None)?;
         let image = match &drawn.integral {
             Some(_) => clamped(drawn.image),
             None => drawn.image,
@@ -185,7 +190,8 @@ impl LacquerRenderer {
     }
 
     /// The draw, and with the denoise on (and `rays` low enough for it: `denoise_sigma`) its
-    /// integral image filtered (denoise.rs).
+    /// integral image filtered (denoise.rs): on the device, or on the host with
+    /// `options.denoise_on_host` or an image larger than a storage buffer.
     fn draw(
         &mut self,
         gpu: &GpuContext,
@@ -194,13 +200,17 @@ impl LacquerRenderer {
         settings: &RenderSettings,
         options: DrawOptions,
     ) -> Result<(HdrImage, Option<DrawTimings>)> {
-        let drawn = self.draw_once(gpu, scene, meshes, settings, options)?;
         let sigma = scene
             .ray_tracing
             .filter(|rt| rt.denoise && rt.bounces > 0)
             .and_then(|rt| denoise_sigma(rt.rays));
+        let on_device =
+            !options.denoise_on_host && DenoisePass::fits(gpu, settings.width, settings.height);
+        let device_sigma = sigma.filter(|_| on_device);
+        let drawn = self.draw_once(gpu, scene, meshes, settings, options, device_sigma)?;
         // A ray-traced draw leaves the radiance unclamped, for the denoise.
         let image = match (sigma, &drawn.integral) {
+            _ if drawn.denoised => drawn.image,
             (Some(sigma), Some(integral)) => denoise(&drawn.image, integral, sigma),
             (None, Some(_)) => clamped(drawn.image),
             (_, None) => drawn.image,
@@ -208,7 +218,8 @@ impl LacquerRenderer {
         Ok((image, drawn.timings))
     }
 
-    /// The recipe: the frame data, then the passes of `options.shading`, strip by strip.
+    /// The recipe: the frame data, then the passes of `options.shading`, strip by strip; with
+    /// `denoise_sigma` and rays traced, the denoise on the device at that σ.
     fn draw_once(
         &mut self,
         gpu: &GpuContext,
@@ -216,6 +227,7 @@ impl LacquerRenderer {
         meshes: &[&GpuMesh],
         settings: &RenderSettings,
         options: DrawOptions,
+        denoise_sigma: Option<f64>,
     ) -> Result<Drawn> {
         let Resources {
             sampler,
@@ -223,6 +235,7 @@ impl LacquerRenderer {
             black_environment,
             timestamps,
             albedo_cache,
+            denoise,
         } = get_or_try_insert(&mut self.resources, || Resources::new(gpu))?;
         let environment = match scene.environment {
             Some(environment) => environment,
@@ -275,7 +288,14 @@ impl LacquerRenderer {
         match options.shading {
             MeshShading::Lacquer => {
                 let pow2_grid = knots.iter().all(|k| fresnel_on_pow2_grid(k));
-                draw_deferred(&inputs, pipelines, targets, buffers, frame, pow2_grid)
+                let denoise = match denoise_sigma {
+                    Some(sigma) => {
+                        Some((get_or_try_insert(denoise, || DenoisePass::new(gpu))?, sigma))
+                    }
+                    None => None,
+                };
+                let frame = (frame, pow2_grid);
+                draw_deferred(&inputs, pipelines, targets, buffers, frame, denoise)
             }
             MeshShading::Trivial => draw_forward(&inputs, pipelines, targets, buffers, frame),
         }
@@ -305,6 +325,8 @@ fn clamped(mut image: HdrImage) -> HdrImage {
 /// What one draw read back.
 struct Drawn {
     image: HdrImage,
+    /// The image was denoised on the device (filtered and clamped; no integral read back).
+    denoised: bool,
     /// A ray-traced draw's integral image ([`LacquerRenderer::render_with_integral`]).
     integral: Option<HdrImage>,
     timings: Option<DrawTimings>,
@@ -358,14 +380,15 @@ impl DrawInputs<'_> {
     }
 }
 
-/// The lacquer draw: per strip, the G-buffer pass, the shading pass and the copy-out.
+/// The lacquer draw: per strip, the G-buffer pass, the shading pass and the copy-out; then, with
+/// `denoise` (the pass and σ) and rays traced, the denoise of the whole image on the device.
 fn draw_deferred(
     inputs: &DrawInputs<'_>,
     pipelines: &mut PipelineTable,
     targets: &mut TargetCache,
     buffers: &mut DrawBuffers,
-    mut frame: Frame,
-    fresnel_pow2_grid: bool,
+    (mut frame, fresnel_pow2_grid): (Frame, bool),
+    denoise: Option<(&mut DenoisePass, f64)>,
 ) -> Result<Drawn> {
     let DrawInputs { gpu, scene, .. } = *inputs;
     let environment_background = scene.background == Background::Environment;
@@ -458,13 +481,24 @@ fn draw_deferred(
     let integral = match targets.attachments.integral.as_mut() {
         Some(integral) if ray_traced => {
             integral.used = true;
-            Some(read_back(&integral.readback, settings)?)
+            Some(&integral.readback)
         }
         _ => None,
     };
+    if let (Some((pass, sigma)), Some(integral)) = (denoise, integral) {
+        let params = denoise_params(settings.width, settings.height, sigma);
+        pass.run(gpu, (&targets.readback, integral), &params)?;
+        return Ok(Drawn {
+            image: read_back(&targets.readback, settings)?,
+            denoised: true,
+            integral: None,
+            timings,
+        });
+    }
     Ok(Drawn {
         image: read_back(&targets.readback, settings)?,
-        integral,
+        denoised: false,
+        integral: integral.map(|b| read_back(b, settings)).transpose()?,
         timings,
     })
 }
@@ -513,6 +547,7 @@ fn draw_forward(
     }
     Ok(Drawn {
         image: read_back(&targets.readback, settings)?,
+        denoised: false,
         integral: None,
         timings,
     })

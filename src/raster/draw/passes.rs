@@ -217,6 +217,8 @@ fn deferred_barriers(
     }
     if targets.used || integral.is_some_and(|i| i.used) {
         rec.memory_barrier(Access::TransferWrite, Access::TransferWrite);
+        // The last draw's denoise (denoise.rs) read both readback buffers and wrote the image's.
+        rec.memory_barrier(Access::ComputeShaderWrite, Access::TransferWrite);
     }
 }
 

@@ -127,6 +127,9 @@ pub struct DrawOptions {
     pub shading: MeshShading,
     /// Record timestamp queries and return [`DrawTimings`].
     pub timed: bool,
+    /// Denoise on the host (`denoise::denoise`, the twin) instead of the device (tests compare
+    /// the two).
+    pub denoise_on_host: bool,
 }
 
 /// GPU time of one draw's passes from timestamp queries, in seconds.

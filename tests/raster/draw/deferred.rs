@@ -107,7 +107,7 @@ fn render_both(
     let mut render = |shading| {
         let options = DrawOptions {
             shading,
-            timed: false,
+            ..DrawOptions::default()
         };
         renderer
             .render_meshes(gpu, &scene, &gpu_meshes, &settings, options)

@@ -1,4 +1,5 @@
 mod deferred;
+mod denoise;
 mod forward;
 mod light_between;
 mod shadows;

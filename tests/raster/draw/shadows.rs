@@ -175,7 +175,9 @@ pub(super) fn draw_with_integral(
     drawn
 }
 
-fn draw_objects<'a>((meshes, materials): (&'a [Mesh], &[&'a Material])) -> Vec<DrawObject<'a>> {
+pub(super) fn draw_objects<'a>(
+    (meshes, materials): (&'a [Mesh], &[&'a Material]),
+) -> Vec<DrawObject<'a>> {
     meshes
         .iter()
         .zip(materials)
@@ -188,7 +190,7 @@ fn draw_objects<'a>((meshes, materials): (&'a [Mesh], &[&'a Material])) -> Vec<D
         .collect()
 }
 
-fn scene<'a>(
+pub(super) fn scene<'a>(
     objects: &'a [DrawObject<'a>],
     (camera, lights): (&'a Camera, &'a [Light]),
     (environment, environment_model): (Option<&'a GpuEnvironment>, EnvironmentModel),
@@ -205,7 +207,7 @@ fn scene<'a>(
     }
 }
 
-fn settings(size: u32) -> RenderSettings {
+pub(super) fn settings(size: u32) -> RenderSettings {
     RenderSettings {
         width: size,
         height: size,
