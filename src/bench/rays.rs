@@ -36,8 +36,10 @@ pub struct RaysBench {
     pub rays: u32,
     /// GPU time of the default scene's draw without ray tracing (s).
     pub off_gpu: Stat,
-    /// ... with shadows, `bounces` and `rays` (s).
+    /// ... with shadows, `bounces` and `rays` (s), the denoise included.
     pub on_gpu: Stat,
+    /// ... of which the denoise on the device (s).
+    pub denoise_gpu: Stat,
     /// on_gpu.median / off_gpu.median.
     pub ratio: f64,
     pub target: Target,
@@ -71,7 +73,7 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<RaysBench> {
         ..on
     };
     let mut renderer = SceneRenderer::new(gpu)?;
-    let (mut off_gpu, mut on_gpu) = (Vec::new(), Vec::new());
+    let (mut off_gpu, mut on_gpu, mut denoise_gpu) = (Vec::new(), Vec::new(), Vec::new());
     let options = DrawOptions {
         timed: true,
         ..DrawOptions::default()
@@ -83,6 +85,9 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<RaysBench> {
             let (_, timings) = renderer.render_with(gpu, &scene, options)?;
             if let (true, Some(t)) = (run > 0, timings) {
                 times.push(t.total);
+                if spec.ray_tracing {
+                    denoise_gpu.push(t.denoise);
+                }
             }
         }
     }
@@ -97,6 +102,7 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<RaysBench> {
         rays: on.rays,
         off_gpu,
         on_gpu,
+        denoise_gpu: Stat::of(denoise_gpu),
         ratio,
         target: Target::at_most(
             "rays: default scene with shadows and light between objects / without",

@@ -150,6 +150,11 @@ pub fn markdown(report: &BenchReport) -> String {
             ),
             &rays.on_gpu,
         );
+        row(
+            "rays",
+            "same, of which the denoise on the device (GPU)".into(),
+            &rays.denoise_gpu,
+        );
         for b in rays.bottom_level.iter().chain([&rays.top_level]) {
             row(
                 "rays",

@@ -31,7 +31,7 @@ use crate::gpu::shaders::interface::{
 };
 use crate::gpu::{
     Access, Binding, BindingKind, Buffer, BufferDesc, BufferUsage, ComputePipeline, GpuContext,
-    Resource,
+    Resource, TimestampPool,
 };
 use crate::output::HdrImage;
 use crate::Result;
@@ -236,13 +236,15 @@ impl DenoisePass {
 
     /// Filters `image` (a draw's readback buffer, unclamped) in place with its `integral` image
     /// (the same size), as [`denoise`] does on the host; both buffers were last written by the
-    /// strips' copy-outs. Submits and waits; the image is then ready for the host to read.
+    /// strips' copy-outs. Submits and waits; the image is then ready for the host to read. With
+    /// `stamps` (at least two), returns the pass's GPU time in seconds.
     pub fn run(
         &mut self,
         gpu: &GpuContext,
         (image, integral): (&Buffer, &Buffer),
         params: &DenoiseParams,
-    ) -> Result<()> {
+        stamps: Option<&TimestampPool>,
+    ) -> Result<f64> {
         let (width, height) = (params.size[0], params.size[1]);
         let bytes = image_bytes(width, height);
         if self.guide_buffer.as_ref().map(Buffer::size) != Some(bytes) {
@@ -254,7 +256,7 @@ impl DenoisePass {
             ))?);
         }
         let Some(guide) = self.guide_buffer.as_ref() else {
-            return Ok(());
+            return Ok(0.0);
         };
         let resources = [
             (DENOISE_IMAGE_BINDING, Resource::Buffer(image)),
@@ -269,6 +271,10 @@ impl DenoisePass {
         );
         let constants = bytemuck::bytes_of(params);
         gpu.submit_and_wait(|rec| {
+            if let Some(pool) = stamps {
+                rec.reset_timestamps(pool);
+                rec.timestamp(pool, 0);
+            }
             // The copy-outs wrote both images (read by both steps, the image written by the
             // second); the last denoise read and wrote the guide.
             rec.memory_barrier(Access::TransferWrite, Access::ComputeShaderRead);
@@ -282,9 +288,18 @@ impl DenoisePass {
             rec.push_constants(&self.filter, constants);
             rec.dispatch(groups.0, groups.1, 1);
             rec.memory_barrier(Access::ComputeShaderWrite, Access::HostRead);
+            if let Some(pool) = stamps {
+                rec.timestamp(pool, 1);
+            }
             Ok(())
         })?;
-        Ok(())
+        Ok(match stamps {
+            Some(pool) => match pool.read_ns(2)?[..] {
+                [start, end] => (end - start).max(0.0) * 1e-9,
+                _ => 0.0,
+            },
+            None => 0.0,
+        })
     }
 }
 

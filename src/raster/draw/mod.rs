@@ -487,7 +487,11 @@ fn draw_deferred(
     };
     if let (Some((pass, sigma)), Some(integral)) = (denoise, integral) {
         let params = denoise_params(settings.width, settings.height, sigma);
-        pass.run(gpu, (&targets.readback, integral), &params)?;
+        let seconds = pass.run(gpu, (&targets.readback, integral), &params, inputs.stamps)?;
+        if let Some(sum) = timings.as_mut() {
+            sum.denoise += seconds;
+            sum.total += seconds;
+        }
         return Ok(Drawn {
             image: read_back(&targets.readback, settings)?,
             denoised: true,

@@ -402,5 +402,6 @@ pub(crate) fn timings_from(ns: &[f64]) -> DrawTimings {
         pass: span(1, 2),
         copy_out: span(2, 3),
         total: span(0, 3),
+        denoise: 0.0,
     }
 }

@@ -140,8 +140,10 @@ pub struct DrawTimings {
     pub pass: f64,
     /// The image (shaded or resolved) → readback buffer.
     pub copy_out: f64,
-    /// From the first command to the last.
+    /// From the first command to the last (with the denoise's).
     pub total: f64,
+    /// The denoise on the device (raster/draw/denoise.rs), after the strips.
+    pub denoise: f64,
 }
 
 impl std::ops::AddAssign for DrawTimings {
@@ -149,6 +151,7 @@ impl std::ops::AddAssign for DrawTimings {
         self.pass += strip.pass;
         self.copy_out += strip.copy_out;
         self.total += strip.total;
+        self.denoise += strip.denoise;
     }
 }
 
