@@ -109,11 +109,10 @@ vec3 layer_bilinear(int k, int face, vec2 st, vec3 axis, vec3 s_dir, vec3 t_dir)
     return top + (bottom - top) * f.y;
 }
 
-// Lpre(d, β) from the texels: the same layers and blend as `prefiltered_radiance`, read by hand.
-vec3 layered_radiance(vec3 d, float beta) {
-    int k0;
-    float t;
-    layer_pair(beta, k0, t);
+// Lpre(d, β) from the texels: the same layers and blend as `prefiltered_radiance`, read by hand,
+// with `layer_pair`'s (k0, t) for β already found (a quadrature whose lookups share one β finds
+// them once).
+vec3 layered_radiance_pair(vec3 d, int k0, float t) {
     // Both layers see d on the same face at the same (s, t).
     int face;
     vec2 st;
@@ -125,6 +124,14 @@ vec3 layered_radiance(vec3 d, float beta) {
     }
     vec3 hi = layer_bilinear(min(k0 + 1, ENV_LAYER_COUNT - 1), face, st, axis, s_dir, t_dir);
     return lo + (hi - lo) * t;
+}
+
+// Lpre(d, β) (twin: `layered_radiance`).
+vec3 layered_radiance(vec3 d, float beta) {
+    int k0;
+    float t;
+    layer_pair(beta, k0, t);
+    return layered_radiance_pair(d, k0, t);
 }
 
 // A(nv) from the object's ALBEDO_KNOTS knots (nv, A_r, A_g, A_b) at nv = (k/(ALBEDO_KNOTS − 1))²
@@ -180,8 +187,9 @@ vec3 bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
 // One lookup of either quadrature: the reflection s of v about the half vector h (vh = V·H > 0),
 // read at β and weighted by scale·F(acos V·H)·G·(V·H)/(nv·nh); nothing where s is below the
 // surface (twin: `LookupSums::add`).
-void add_lookup(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, float scale,
-    float beta, inout vec3 sum, inout vec3 weights) {
+// `add_lookup` reading the layers at `layer_pair`'s (k0, t).
+void add_lookup_pair(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, float scale,
+    int k0, float t, inout vec3 sum, inout vec3 weights) {
     vec3 s = 2.0 * vh * h - v;
     float nl = dot(n, s);
     if (nl <= 0.0) {
@@ -191,8 +199,16 @@ void add_lookup(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, flo
     float g = cook_torrance_g(cos_h, nv, nl, vh);
     vec3 f = fresnel_table(angle_deg_of_cos(min(vh, 1.0)), p.fresnel_first, p.fresnel_count);
     vec3 weight = f * (scale * g * vh / (nv * cos_h));
-    sum += weight * layered_radiance(s, beta);
+    sum += weight * layered_radiance_pair(s, k0, t);
     weights += weight;
+}
+
+void add_lookup(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, float scale,
+    float beta, inout vec3 sum, inout vec3 weights) {
+    int k0;
+    float t;
+    layer_pair(beta, k0, t);
+    add_lookup_pair(p, n, v, nv, h, vh, scale, k0, t, sum, weights);
 }
 
 // Σ w·L / Σ w · A(nv) per channel: exact in a white furnace (twin: `LookupSums::normalized`).
@@ -238,11 +254,16 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv) {
     float spacing = frame.env_lattice.x;
     float max_half = frame.env_lattice.w;
     float sigma = p.beckmann_m * 0.70710678;
-    float sigma_p = sigma * sqrt(max(1.0 - nv * nv, 0.0));
+    float beta0 = 2.0 * nv * sigma * frame.env_lattice_share.x;
+    float sigma_p = sqrt(max(sigma * sigma - 0.25 * beta0 * beta0, 0.0));
     float reach = frame.env_lattice.y * sigma_p;
-    float step = max(spacing * nv * sigma, reach / max_half);
-    float beta = max(2.0 * nv * sigma, 2.0 * step / spacing);
+    float step = max(spacing * 0.5 * beta0, reach / max_half);
+    float beta = max(beta0, 2.0 * step / spacing);
     int half_count = int(min(ceil(reach / step), max_half));
+    // Every node reads the same blur: its layers and blend found once.
+    int k0;
+    float t;
+    layer_pair(beta, k0, t);
     vec3 sum = vec3(0.0);
     vec3 weights = vec3(0.0);
     for (int i = -half_count; i <= half_count; ++i) {
@@ -253,7 +274,7 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv) {
         vec3 h = normalize(tangent * slope + n);
         float vh = dot(v, h);
         if (gauss > 0.0 && vh > 0.0) {
-            add_lookup(p, n, v, nv, h, vh, gauss, beta, sum, weights);
+            add_lookup_pair(p, n, v, nv, h, vh, gauss, k0, t, sum, weights);
         }
     }
     return normalized_lookups(p, nv, sum, weights);

@@ -194,10 +194,14 @@ impl LookupSums {
     }
 }
 
-/// The plane-of-incidence lattice (`specular_lattice`): node spacing in units of the lookup
-/// blur, reach in standard deviations of the nodes' distribution, most nodes on each side of the
-/// mirror direction. Measured in BENCHMARKS.md ("The `brdf` environment model"); packed into
-/// `Frame::env_lattice` for the shaders.
+/// The plane-of-incidence lattice (`specular_lattice`): the share of the lobe's width across the
+/// plane that the lookups' blur supplies, node spacing in units of the blur, reach in standard
+/// deviations of the nodes' distribution, most nodes on each side of the mirror direction.
+/// Measured in BENCHMARKS.md ("The `brdf` environment model"); packed into `Frame::env_lattice`
+/// and `env_lattice_share` for the shaders.
+/// t = 1 keeps the default scene within the issue's ≤ 1.5× `paper`; t = 0.93, spacing 1.7, reach
+/// 3.0 is a third more accurate on a sphere and costs ~1.6× (BENCHMARKS.md).
+pub const LATTICE_BLUR_SHARE: f64 = 1.0;
 pub const LATTICE_SPACING: f64 = 2.0;
 pub const LATTICE_REACH: f64 = 2.5;
 pub const LATTICE_MAX_HALF: u32 = 16;
@@ -247,9 +251,11 @@ pub fn lattice_taper(x: f64) -> f64 {
 /// The specular part of the `brdf` model for a narrow lobe, by a lattice along the plane of
 /// incidence. The Beckmann slopes are Gaussian, σ = m/√2 per axis; mapped to reflected
 /// directions, the lobe is 2·nv·σ wide across the plane and 2·σ along it. Each node reads the
-/// layers at β = 2·nv·σ, which supplies the width across the plane and a share of the width
-/// along it; the nodes lie on the plane of incidence at slopes p spaced `LATTICE_SPACING`·β/2
-/// apart, weighted by the Gaussian of the rest of the in-plane variance, σ_p² = σ²·(1 − nv²),
+/// layers at β = t·2·nv·σ (t = `LATTICE_BLUR_SHARE`), which supplies the width across the plane
+/// (t a little under 1 measured better on a sphere: the lookups are a little wider than their
+/// nominal blur, the lobe's profile across the plane lighter-tailed than their Gaussian) and a
+/// share of the width along it; the nodes lie on the plane of incidence at slopes p spaced `LATTICE_SPACING`·β/2
+/// apart, weighted by the Gaussian of the rest of the in-plane variance, σ_p² = σ² − (β/2)²,
 /// times F·G·(V·H)/(nv·nh) (`lattice_taper` at the reach). At normal incidence that is one
 /// lookup; towards grazing, more (at most 2·`LATTICE_MAX_HALF` + 1, the spacing and blur growing
 /// past that). Normalised by A(nv) like [`specular_quadrature`].
@@ -265,10 +271,11 @@ pub fn specular_lattice(
     }
     let (tangent, _) = incidence_frame(n, v, nv);
     let sigma = brdf.beckmann_m / std::f64::consts::SQRT_2;
-    let sigma_p = sigma * (1.0 - nv * nv).max(0.0).sqrt();
+    let beta0 = 2.0 * nv * sigma * LATTICE_BLUR_SHARE;
+    let sigma_p = (sigma * sigma - (0.5 * beta0).powi(2)).max(0.0).sqrt();
     let reach = LATTICE_REACH * sigma_p;
-    let step = (LATTICE_SPACING * nv * sigma).max(reach / f64::from(LATTICE_MAX_HALF));
-    let beta = (2.0 * nv * sigma).max(2.0 * step / LATTICE_SPACING);
+    let step = (LATTICE_SPACING * 0.5 * beta0).max(reach / f64::from(LATTICE_MAX_HALF));
+    let beta = beta0.max(2.0 * step / LATTICE_SPACING);
     let half = (reach / step).ceil().min(f64::from(LATTICE_MAX_HALF)) as i32;
     let mut sums = LookupSums::default();
     for i in -half..=half {

@@ -212,6 +212,8 @@ shader_interface! {
             env_lattice: vec4,
             env_lattice_band: vec4,
             env_grid: vec4,
+            /// x: the lattice's blur share t (`LATTICE_BLUR_SHARE`).
+            env_lattice_share: vec4,
         }
 
         /// Step 1's push constants (equirect_to_cube*.comp).

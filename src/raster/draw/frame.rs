@@ -133,6 +133,7 @@ impl Frame {
             q::FIS_M_LO as f32,
             q::FIS_M_HI as f32,
         ];
+        self.env_lattice_share = [q::LATTICE_BLUR_SHARE as f32, 0.0, 0.0, 0.0];
         self.env_grid = [
             q::GRID_BLUR_SHARE as f32,
             q::GRID_SPACING as f32,
