@@ -118,13 +118,14 @@ pub fn specular_quadrature(
     n: DVec3,
     v: DVec3,
 ) -> [f64; 3] {
-    let nv = n.dot(v);
-    if nv.is_nan() || nv <= 0.0 {
+    let Some(Incidence {
+        nv,
+        tangent,
+        bitangent,
+    }) = incidence(n, v)
+    else {
         return [0.0; 3];
-    }
-    // The frame's first axis lies in the plane of incidence, so the pattern is symmetric about
-    // it and moves continuously with V.
-    let (tangent, bitangent) = incidence_frame(n, v, nv);
+    };
     let m2 = brdf.beckmann_m * brdf.beckmann_m;
     let count = samples.max(1);
     let mut sums = LookupSums::default();
@@ -254,8 +255,9 @@ pub fn lattice_taper(x: f64) -> f64 {
 /// layers at β = t·2·nv·σ (t = `LATTICE_BLUR_SHARE`), which supplies the width across the plane
 /// (t a little under 1 measured better on a sphere: the lookups are a little wider than their
 /// nominal blur, the lobe's profile across the plane lighter-tailed than their Gaussian) and a
-/// share of the width along it; the nodes lie on the plane of incidence at slopes p spaced `LATTICE_SPACING`·β/2
-/// apart, weighted by the Gaussian of the rest of the in-plane variance, σ_p² = σ² − (β/2)²,
+/// share of the width along it; the nodes lie on the plane of incidence at slopes p spaced
+/// `LATTICE_SPACING`·β/2 apart, weighted by the Gaussian of the rest of the in-plane variance,
+/// σ_p² = σ² − (β/2)²,
 /// times F·G·(V·H)/(nv·nh) (`lattice_taper` at the reach). At normal incidence that is one
 /// lookup; towards grazing, more (at most 2·`LATTICE_MAX_HALF` + 1, the spacing and blur growing
 /// past that). Normalised by A(nv) like [`specular_quadrature`].
@@ -265,11 +267,9 @@ pub fn specular_lattice(
     n: DVec3,
     v: DVec3,
 ) -> [f64; 3] {
-    let nv = n.dot(v);
-    if nv.is_nan() || nv <= 0.0 {
+    let Some(Incidence { nv, tangent, .. }) = incidence(n, v) else {
         return [0.0; 3];
-    }
-    let (tangent, _) = incidence_frame(n, v, nv);
+    };
     let sigma = brdf.beckmann_m / std::f64::consts::SQRT_2;
     let beta0 = 2.0 * nv * sigma * LATTICE_BLUR_SHARE;
     let sigma_p = (sigma * sigma - (0.5 * beta0).powi(2)).max(0.0).sqrt();
@@ -309,11 +309,14 @@ pub fn specular_grid(
     n: DVec3,
     v: DVec3,
 ) -> [f64; 3] {
-    let nv = n.dot(v);
-    if nv.is_nan() || nv <= 0.0 {
+    let Some(Incidence {
+        nv,
+        tangent,
+        bitangent,
+    }) = incidence(n, v)
+    else {
         return [0.0; 3];
-    }
-    let (tangent, bitangent) = incidence_frame(n, v, nv);
+    };
     let sigma = brdf.beckmann_m / std::f64::consts::SQRT_2;
     let beta = 2.0 * nv * sigma * GRID_BLUR_SHARE;
     // The nodes' variances along and across the plane: the lobe's less the lookups' blur.
@@ -364,9 +367,22 @@ fn node_blur(
     beta * (jacobian(tangent) * jacobian(bitangent) / (4.0 * nv)).sqrt()
 }
 
-/// The frame of the plane of incidence: the tangent towards V's projection (any axis at normal
-/// incidence, where the pattern's orientation does not matter), and N × tangent.
-fn incidence_frame(n: DVec3, v: DVec3, nv: f64) -> (DVec3, DVec3) {
+/// Where every quadrature starts: nv and the frame of the plane of incidence.
+struct Incidence {
+    nv: f64,
+    /// Towards V's projection (any axis at normal incidence): the quadratures' patterns are
+    /// symmetric about it and move continuously with V.
+    tangent: DVec3,
+    /// N × tangent.
+    bitangent: DVec3,
+}
+
+/// The incidence at unit `n`, `v`; None where V is at or below the surface (or NaN).
+fn incidence(n: DVec3, v: DVec3) -> Option<Incidence> {
+    let nv = n.dot(v);
+    if nv.is_nan() || nv <= 0.0 {
+        return None;
+    }
     let along = v - nv * n;
     let other = if n.x.abs() < 0.5 { DVec3::X } else { DVec3::Y };
     let tangent = if along.length_squared() > 1e-12 {
@@ -374,7 +390,11 @@ fn incidence_frame(n: DVec3, v: DVec3, nv: f64) -> (DVec3, DVec3) {
     } else {
         n.cross(other).normalize()
     };
-    (tangent, n.cross(tangent))
+    Some(Incidence {
+        nv,
+        tangent,
+        bitangent: n.cross(tangent),
+    })
 }
 
 /// The map's bright lights (bright.rs) through the specular lobe, Σ f_spec·E·(N·l): the twin of
