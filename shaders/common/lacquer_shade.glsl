@@ -1,5 +1,6 @@
 // Radiance leaving a lacquer surface point towards the camera: Σ over lights of f_r · E · (N·L)
-// · vis (SPEC §2, §4, §6) plus the environment term of the pipeline's model (ENV_MODEL, SPEC §4):
+// · vis (SPEC §2, §4, §6) plus the environment term of the pipeline's model (SPEC §4; the includer
+// defines BRDF_ENVIRONMENT_MODEL for `brdf`):
 // `paper`: L_env = F(acos nv)·Lpre(R, β(nv)) + k_d·max(a + b·nv, 0)·g(r)·E_irr(N)/π;
 // `brdf`: the same diffuse half, and the specular integral of brdf_environment.glsl.
 //
@@ -11,9 +12,6 @@
 #include "brdf_environment.glsl"
 #include "visibility.glsl"
 
-// A constant, so a pipeline compiles only its model's code.
-layout(constant_id = ENV_MODEL_ID) const int ENV_MODEL = ENV_MODEL_PAPER;
-
 // view_blur: (β_normal, β_grazing, p) of SPEC §4's β(nv), per material; nv2 = dot_compensated(n, v)
 // and f_diff = view_dependent_diffuse(p, nv2), shared with the lights; env_samples: the `brdf`
 // model's lobe samples (ENV_SAMPLES where the camera looks, ENV_HIT_SAMPLES at a path's hit).
@@ -24,14 +22,18 @@ vec3 environment_light(LacquerParams p, vec3 view_blur, vec3 n, vec3 v, vec2 nv2
         return vec3(0.0);
     }
     vec3 specular;
-    if (ENV_MODEL == ENV_MODEL_BRDF) {
-        specular = brdf_environment_specular(p, n, v, nv, env_samples);
-    } else {
+    // A define, not a specialization constant: the `brdf` model's code behind a constant that
+    // is false still cost lavapipe's `paper` pipelines ~5 % (BENCHMARKS.md).
+#ifdef BRDF_ENVIRONMENT_MODEL
+    specular = brdf_environment_specular(p, n, v, nv, env_samples);
+#else
+    {
         vec3 r = 2.0 * nv * n - v;
         float beta = view_blur.y + (view_blur.x - view_blur.y) * pow(min(nv, 1.0), view_blur.z);
         specular = fresnel_table(angle_deg_of_cos(nv), p.fresnel_first, p.fresnel_count)
             * prefiltered_radiance(r, beta);
     }
+#endif
     vec3 irradiance = textureLod(env_irradiance, n, 0.0).rgb;
     return specular + f_diff * irradiance;
 }

@@ -8,7 +8,7 @@ use crate::environment::gpu::GpuEnvironment;
 use crate::gpu::shaders::interface::{
     BrdfEvalParams, DrawConstants, Frame, ObjectMaterial, BACKGROUND_COLOR, BRDF_EVAL_WORKGROUP,
     ENV_EVAL_DIRECTIONS_BINDING, ENV_EVAL_PARAMS_BINDING, ENV_EVAL_VALUES_BINDING,
-    ENV_LAYER_TEXELS_BINDING, ENV_MODEL_BRDF, FRAME_BINDING, FRESNEL_KNOTS_BINDING,
+    ENV_LAYER_TEXELS_BINDING, FRAME_BINDING, FRESNEL_KNOTS_BINDING,
 };
 use crate::gpu::{
     Access, Binding, BindingKind, BufferDesc, BufferUsage, ComputePipeline, GpuContext, Resource,
@@ -50,7 +50,6 @@ pub fn brdf_environment_specular_gpu(
         sample_count: 1,
         background_kind: BACKGROUND_COLOR,
         fresnel_pow2_grid: 0,
-        env_model: ENV_MODEL_BRDF,
         env_samples: BRDF_SAMPLES,
         env_hit_samples: BRDF_HIT_SAMPLES,
         shadows: 0,

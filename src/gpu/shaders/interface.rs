@@ -93,9 +93,6 @@ shader_interface! {
         BACKGROUND_COLOR: u32 = 0;
         BACKGROUND_ENVIRONMENT: u32 = 1;
 
-        /// The values of the `env_model` specialization constant: SPEC §4's environment models.
-        ENV_MODEL_PAPER: u32 = 0;
-        ENV_MODEL_BRDF: u32 = 1;
     }
 
     specialization_constants {
@@ -111,8 +108,6 @@ shader_interface! {
             /// Every Fresnel table of the draw has its knots on a power-of-two grid
             /// (`FRESNEL_POW2_GRID`, a VkBool32).
             fresnel_pow2_grid,
-            /// `ENV_MODEL_PAPER` or `ENV_MODEL_BRDF` (`ENV_MODEL`).
-            env_model,
             /// The `brdf` model's lobe samples per point the camera sees (`ENV_SAMPLES`).
             env_samples,
             /// The same at the hits of the light between objects' paths (`ENV_HIT_SAMPLES`).

@@ -9,9 +9,9 @@ use crate::environment::gpu::GpuEnvironment;
 use crate::environment::EnvironmentModel;
 use crate::gpu::shaders::interface::{
     DrawConstants, BACKGROUND_COLOR, BACKGROUND_ENVIRONMENT, ENV_IRRADIANCE_BINDING,
-    ENV_LAYERS_BINDING, ENV_LAYER_TEXELS_BINDING, ENV_MODEL_BRDF, ENV_MODEL_PAPER, FRAME_BINDING,
-    FRESNEL_KNOTS_BINDING, GBUFFER_NORMAL_BINDING, GBUFFER_POSITION_BINDING, MAX_ENV_LAYERS,
-    OBJECT_GEOMETRY_BINDING, OBJECT_MATERIAL_BINDING, SCENE_TLAS_BINDING,
+    ENV_LAYERS_BINDING, ENV_LAYER_TEXELS_BINDING, FRAME_BINDING, FRESNEL_KNOTS_BINDING,
+    GBUFFER_NORMAL_BINDING, GBUFFER_POSITION_BINDING, MAX_ENV_LAYERS, OBJECT_GEOMETRY_BINDING,
+    OBJECT_MATERIAL_BINDING, SCENE_TLAS_BINDING,
 };
 use crate::gpu::{
     AccelerationStructure, Binding, BindingKind, Buffer, DepthCompare, DepthTest, DescriptorSet,
@@ -144,10 +144,6 @@ impl PipelineKey {
                 false => BACKGROUND_COLOR,
             },
             fresnel_pow2_grid: u32::from(variant.fresnel_pow2_grid),
-            env_model: match variant.environment_model {
-                EnvironmentModel::Paper => ENV_MODEL_PAPER,
-                EnvironmentModel::Brdf => ENV_MODEL_BRDF,
-            },
             env_samples: BRDF_SAMPLES,
             env_hit_samples: BRDF_HIT_SAMPLES,
             shadows: u32::from(variant.shadows),
@@ -188,11 +184,16 @@ impl PipelineKey {
             // 1 > 0 passes where a sample is covered; early, so uncovered blocks are skipped.
             PipelineKind::Shade(variant) => self.full_screen(
                 "shade",
-                match (variant.ray_traced, multisampled) {
-                    (false, false) => SHADE_FRAG,
-                    (false, true) => SHADE_MS_FRAG,
-                    (true, false) => SHADE_RT_FRAG,
-                    (true, true) => SHADE_RT_MS_FRAG,
+                // The model is compiled in (a define), not specialized: BENCHMARKS.md.
+                match (variant.environment_model, variant.ray_traced, multisampled) {
+                    (EnvironmentModel::Paper, false, false) => SHADE_FRAG,
+                    (EnvironmentModel::Paper, false, true) => SHADE_MS_FRAG,
+                    (EnvironmentModel::Paper, true, false) => SHADE_RT_FRAG,
+                    (EnvironmentModel::Paper, true, true) => SHADE_RT_MS_FRAG,
+                    (EnvironmentModel::Brdf, false, false) => SHADE_BRDF_FRAG,
+                    (EnvironmentModel::Brdf, false, true) => SHADE_BRDF_MS_FRAG,
+                    (EnvironmentModel::Brdf, true, false) => SHADE_RT_BRDF_FRAG,
+                    (EnvironmentModel::Brdf, true, true) => SHADE_RT_BRDF_MS_FRAG,
                 },
                 (shade_bindings(variant.ray_traced), 1),
                 Some(DepthTest {

@@ -1,0 +1,6 @@
+#version 450
+// The lacquer shading pass in the `brdf` environment model (SPEC §4) for
+// multisampled draws (common/shade_body.glsl).
+#define MULTISAMPLED
+#define BRDF_ENVIRONMENT_MODEL
+#include "shade_body.glsl"
