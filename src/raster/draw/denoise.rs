@@ -248,16 +248,13 @@ impl DenoisePass {
         let (width, height) = (params.size[0], params.size[1]);
         let bytes = image_bytes(width, height);
         if self.guide_buffer.as_ref().map(Buffer::size) != Some(bytes) {
+            // Another size: the old guide is freed before the new one is made.
             self.guide_buffer = None;
-            self.guide_buffer = Some(gpu.create_buffer(BufferDesc::device_local(
-                "denoise guide",
-                bytes,
-                BufferUsage::STORAGE,
-            ))?);
         }
-        let Some(guide) = self.guide_buffer.as_ref() else {
-            return Ok(0.0);
-        };
+        let guide = &*super::get_or_try_insert(&mut self.guide_buffer, || {
+            let desc = BufferDesc::device_local("denoise guide", bytes, BufferUsage::STORAGE);
+            Ok(gpu.create_buffer(desc)?)
+        })?;
         let resources = [
             (DENOISE_IMAGE_BINDING, Resource::Buffer(image)),
             (DENOISE_INTEGRAL_BINDING, Resource::Buffer(integral)),
