@@ -18,6 +18,10 @@
 //
 // The layers it reads are the residual of the map's bright split (environment/bright.rs); the
 // bright parts come back as the frame's `env_light_*` lights, evaluated exactly (`bright_specular`).
+// Where the camera looks, the grid and filtered importance sampling read the rough split instead
+// (`split_bright_rough`: every bright block a light, so no light box is left in the layers for a
+// wide lobe's tails to meet): its residual's texels from `frame.env_rough.x`, its lights
+// `env_rough_light_*`.
 //
 // The includer includes frame.glsl and lacquer_brdf.glsl first and binds ENV_LAYER_TEXELS_BINDING.
 
@@ -63,22 +67,23 @@ void select_face(vec3 d, out int face, out vec2 st, out vec3 axis, out vec3 s_di
     st = vec2(dot(d, s_dir), dot(d, t_dir)) / major;
 }
 
-// The texel of layer k holding direction d.
-vec3 layer_texel(int k, vec3 d) {
+// The texel of layer k holding direction d, of the layers whose texels start at `base` (0: the
+// residual's; `frame.env_rough.x`: the rough split's residual, laid out the same after them).
+vec3 layer_texel(int k, vec3 d, int base) {
     int face;
     vec2 st;
     vec3 axis, s_dir, t_dir;
     select_face(d, face, st, axis, s_dir, t_dir);
     int size = frame.layer_face_size[k / 4][k % 4];
     ivec2 ij = clamp(ivec2(floor((st + 1.0) * 0.5 * float(size))), ivec2(0), ivec2(size - 1));
-    int first = frame.layer_first_texel[k / 4][k % 4];
+    int first = base + frame.layer_first_texel[k / 4][k % 4];
     return texelFetch(env_layer_texels, first + (face * size + ij.y) * size + ij.x).rgb;
 }
 
 // Layer k at the direction d that select_face put at (face, st), bilinear over the four texel
 // centres around it; each tap is looked up by its direction (for a tap inside the face that is
 // the texel itself).
-vec3 layer_bilinear(int k, int face, vec2 st, vec3 axis, vec3 s_dir, vec3 t_dir) {
+vec3 layer_bilinear(int k, int face, vec2 st, vec3 axis, vec3 s_dir, vec3 t_dir, int base) {
     float size = float(frame.layer_face_size[k / 4][k % 4]);
     vec2 xy = (st + 1.0) * 0.5 * size - 0.5;
     vec2 xy0 = floor(xy);
@@ -88,7 +93,8 @@ vec3 layer_bilinear(int k, int face, vec2 st, vec3 axis, vec3 s_dir, vec3 t_dir)
     if (all(greaterThanEqual(ij, ivec2(0))) && all(lessThan(ij + 1, ivec2(isize)))) {
         // All four taps inside the face: each is the texel itself, read without a face selection
         // per tap (the same texels the rule below finds).
-        int row = frame.layer_first_texel[k / 4][k % 4] + (face * isize + ij.y) * isize + ij.x;
+        int row = base + frame.layer_first_texel[k / 4][k % 4] + (face * isize + ij.y) * isize
+            + ij.x;
         vec3 a = texelFetch(env_layer_texels, row).rgb;
         vec3 b = texelFetch(env_layer_texels, row + 1).rgb;
         vec3 c = texelFetch(env_layer_texels, row + isize).rgb;
@@ -100,38 +106,39 @@ vec3 layer_bilinear(int k, int face, vec2 st, vec3 axis, vec3 s_dir, vec3 t_dir)
     // Face coordinates of the tap centres x0, x0 + 1 (and y0, y0 + 1).
     vec2 c0 = 2.0 * (xy0 + 0.5) / size - 1.0;
     vec2 c1 = 2.0 * (xy0 + 1.5) / size - 1.0;
-    vec3 a = layer_texel(k, axis + s_dir * c0.x + t_dir * c0.y);
-    vec3 b = layer_texel(k, axis + s_dir * c1.x + t_dir * c0.y);
-    vec3 c = layer_texel(k, axis + s_dir * c0.x + t_dir * c1.y);
-    vec3 e = layer_texel(k, axis + s_dir * c1.x + t_dir * c1.y);
+    vec3 a = layer_texel(k, axis + s_dir * c0.x + t_dir * c0.y, base);
+    vec3 b = layer_texel(k, axis + s_dir * c1.x + t_dir * c0.y, base);
+    vec3 c = layer_texel(k, axis + s_dir * c0.x + t_dir * c1.y, base);
+    vec3 e = layer_texel(k, axis + s_dir * c1.x + t_dir * c1.y, base);
     vec3 top = a + (b - a) * f.x;
     vec3 bottom = c + (e - c) * f.x;
     return top + (bottom - top) * f.y;
 }
 
-// Lpre(d, β) from the texels: the same layers and blend as `prefiltered_radiance`, read by hand,
-// with `layer_pair`'s (k0, t) for β already found (a quadrature whose lookups share one β finds
-// them once).
-vec3 layered_radiance_pair(vec3 d, int k0, float t) {
+// Lpre(d, β) from the texels from `base`: the same layers and blend as `prefiltered_radiance`,
+// read by hand, with `layer_pair`'s (k0, t) for β already found (a quadrature whose lookups share
+// one β finds them once).
+vec3 layered_radiance_pair(vec3 d, int k0, float t, int base) {
     // Both layers see d on the same face at the same (s, t).
     int face;
     vec2 st;
     vec3 axis, s_dir, t_dir;
     select_face(d, face, st, axis, s_dir, t_dir);
-    vec3 lo = layer_bilinear(k0, face, st, axis, s_dir, t_dir);
+    vec3 lo = layer_bilinear(k0, face, st, axis, s_dir, t_dir, base);
     if (t == 0.0) {
         return lo;
     }
-    vec3 hi = layer_bilinear(min(k0 + 1, ENV_LAYER_COUNT - 1), face, st, axis, s_dir, t_dir);
+    vec3 hi = layer_bilinear(min(k0 + 1, ENV_LAYER_COUNT - 1), face, st, axis, s_dir, t_dir,
+        base);
     return lo + (hi - lo) * t;
 }
 
 // Lpre(d, β) (twin: `layered_radiance`).
-vec3 layered_radiance(vec3 d, float beta) {
+vec3 layered_radiance(vec3 d, float beta, int base) {
     int k0;
     float t;
     layer_pair(beta, k0, t);
-    return layered_radiance_pair(d, k0, t);
+    return layered_radiance_pair(d, k0, t, base);
 }
 
 // A(nv) from the object's ALBEDO_KNOTS knots (nv, A_r, A_g, A_b) at nv = (k/(ALBEDO_KNOTS − 1))²
@@ -146,40 +153,63 @@ vec3 albedo_at(int first, float nv) {
     return a + (b - a) * t;
 }
 
-// The map's bright parts, taken out of the layers as directional lights (environment/bright.rs,
-// `bright_specular` in the twin): Σ f_spec·E·(N·l) = Σ F·D·G·E/(4·nv), exact per light.
-vec3 bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
-    vec3 sum = vec3(0.0);
-    // Reflection about H is reflection about N followed by a turn of 2·∠(N, H), so a light more
-    // than 2·θ_max from the mirror direction R has ∠(N, H) > θ_max, tan²θ_max = 50 m²: the test
-    // below would skip it, and one dot product does it first.
-    vec3 r = 2.0 * nv * n - v;
+// One of the map's bright parts, taken out of the layers as a directional light (environment/
+// bright.rs): f_spec·E·(N·l) = F·D·G·E/(4·nv), exact; 0 for a light beyond `cull_cos` of the
+// mirror direction r (`bright_cull_cos`).
+vec3 bright_light(LacquerParams p, vec3 n, vec3 v, float nv, vec3 r, float cull_cos, vec3 l,
+    vec3 irradiance) {
+    if (dot(r, l) < cull_cos) {
+        return vec3(0.0);
+    }
+    float nl = dot(n, l);
+    vec3 half_sum = v + l;
+    float half_len = length(half_sum);
+    if (nl <= 0.0 || half_len <= 0.0) {
+        return vec3(0.0);
+    }
+    vec3 h = half_sum / half_len;
+    float nh = dot(n, h);
+    // A light this far outside the lobe has D below e^-50 of its peak: a term under f32's
+    // resolution of any pixel it could be added to, skipped before the Fresnel table and exp.
+    vec3 c = cross(n, h);
+    if (nh <= 0.0 || dot(c, c) > 50.0 * p.beckmann_m * p.beckmann_m * nh * nh) {
+        return vec3(0.0);
+    }
+    float vh = dot(v, h);
+    float d = beckmann_d(n, h, nh, p.beckmann_m);
+    float g = cook_torrance_g(nh, nv, nl, vh);
+    vec3 f = fresnel_table(angle_deg_of_cos(min(vh, 1.0)), p.fresnel_first, p.fresnel_count);
+    return f * (d * g / (4.0 * nv)) * irradiance;
+}
+
+// Reflection about H is reflection about N followed by a turn of 2·∠(N, H), so a light more than
+// 2·θ_max from the mirror direction R has ∠(N, H) > θ_max, tan²θ_max = 50 m²: `bright_light`'s
+// lobe test would skip it, and one dot product with R does it first.
+float bright_cull_cos(LacquerParams p) {
     float cull_angle = 2.0 * atan(7.0710678 * p.beckmann_m);
-    float cull_cos = cull_angle < PI ? cos(cull_angle) : -2.0;
+    return cull_angle < PI ? cos(cull_angle) : -2.0;
+}
+
+// The bright split's lights (`env_light_*`; twin: `bright_specular`).
+vec3 bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
+    vec3 r = 2.0 * nv * n - v;
+    float cull_cos = bright_cull_cos(p);
+    vec3 sum = vec3(0.0);
     for (int i = 0; i < frame.environment.z; ++i) {
-        vec3 l = frame.env_light_direction[i].xyz;
-        if (dot(r, l) < cull_cos) {
-            continue;
-        }
-        float nl = dot(n, l);
-        vec3 half_sum = v + l;
-        float half_len = length(half_sum);
-        if (nl <= 0.0 || half_len <= 0.0) {
-            continue;
-        }
-        vec3 h = half_sum / half_len;
-        float nh = dot(n, h);
-        // A light this far outside the lobe has D below e^-50 of its peak: a term under f32's
-        // resolution of any pixel it could be added to, skipped before the Fresnel table and exp.
-        vec3 c = cross(n, h);
-        if (nh <= 0.0 || dot(c, c) > 50.0 * p.beckmann_m * p.beckmann_m * nh * nh) {
-            continue;
-        }
-        float vh = dot(v, h);
-        float d = beckmann_d(n, h, nh, p.beckmann_m);
-        float g = cook_torrance_g(nh, nv, nl, vh);
-        vec3 f = fresnel_table(angle_deg_of_cos(min(vh, 1.0)), p.fresnel_first, p.fresnel_count);
-        sum += f * (d * g / (4.0 * nv)) * frame.env_light_irradiance[i].rgb;
+        sum += bright_light(p, n, v, nv, r, cull_cos, frame.env_light_direction[i].xyz,
+            frame.env_light_irradiance[i].rgb);
+    }
+    return sum;
+}
+
+// The rough split's lights (`env_rough_light_*`; twin: `bright_specular` of them).
+vec3 rough_bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
+    vec3 r = 2.0 * nv * n - v;
+    float cull_cos = bright_cull_cos(p);
+    vec3 sum = vec3(0.0);
+    for (int i = 0; i < frame.env_rough.y; ++i) {
+        sum += bright_light(p, n, v, nv, r, cull_cos, frame.env_rough_light_direction[i].xyz,
+            frame.env_rough_light_irradiance[i].rgb);
     }
     return sum;
 }
@@ -189,7 +219,7 @@ vec3 bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
 // surface (twin: `LookupSums::add`).
 // `add_lookup` reading the layers at `layer_pair`'s (k0, t).
 void add_lookup_pair(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, float scale,
-    int k0, float t, inout vec3 sum, inout vec3 weights) {
+    int k0, float t, int base, inout vec3 sum, inout vec3 weights) {
     vec3 s = 2.0 * vh * h - v;
     float nl = dot(n, s);
     if (nl <= 0.0) {
@@ -199,16 +229,16 @@ void add_lookup_pair(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh
     float g = cook_torrance_g(cos_h, nv, nl, vh);
     vec3 f = fresnel_table(angle_deg_of_cos(min(vh, 1.0)), p.fresnel_first, p.fresnel_count);
     vec3 weight = f * (scale * g * vh / (nv * cos_h));
-    sum += weight * layered_radiance_pair(s, k0, t);
+    sum += weight * layered_radiance_pair(s, k0, t, base);
     weights += weight;
 }
 
 void add_lookup(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, float scale,
-    float beta, inout vec3 sum, inout vec3 weights) {
+    float beta, int base, inout vec3 sum, inout vec3 weights) {
     int k0;
     float t;
     layer_pair(beta, k0, t);
-    add_lookup_pair(p, n, v, nv, h, vh, scale, k0, t, sum, weights);
+    add_lookup_pair(p, n, v, nv, h, vh, scale, k0, t, base, sum, weights);
 }
 
 // Σ w·L / Σ w · A(nv) per channel: exact in a white furnace (twin: `LookupSums::normalized`).
@@ -274,7 +304,7 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv) {
         vec3 h = normalize(tangent * slope + n);
         float vh = dot(v, h);
         if (gauss > 0.0 && vh > 0.0) {
-            add_lookup_pair(p, n, v, nv, h, vh, gauss, k0, t, sum, weights);
+            add_lookup_pair(p, n, v, nv, h, vh, gauss, k0, t, 0, sum, weights);
         }
     }
     return normalized_lookups(p, nv, sum, weights);
@@ -295,8 +325,9 @@ float node_blur(vec3 v, vec3 h, vec3 tangent, vec3 bitangent, float x, float y, 
 }
 
 // The wider-lobe quadrature (twin: `specular_grid`, whose doc derives it): a grid of Beckmann
-// slopes from the lobe's Gaussian less the lookups' blur, each read at its node's blur.
-vec3 specular_grid(LacquerParams p, vec3 n, vec3 v, float nv) {
+// slopes from the lobe's Gaussian less the lookups' blur, each read at its node's blur from the
+// layers at `base`.
+vec3 specular_grid(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
     vec3 tangent, bitangent;
     incidence_frame(n, v, nv, tangent, bitangent);
     float share = frame.env_grid.x;
@@ -325,7 +356,7 @@ vec3 specular_grid(LacquerParams p, vec3 n, vec3 v, float nv) {
             float vh = dot(v, h);
             if (vh > 0.0) {
                 float blur = node_blur(v, h, tangent, bitangent, x, y, beta, nv);
-                add_lookup(p, n, v, nv, h, vh, scale, blur, sum, weights);
+                add_lookup(p, n, v, nv, h, vh, scale, blur, base, sum, weights);
             }
         }
     }
@@ -334,7 +365,7 @@ vec3 specular_grid(LacquerParams p, vec3 n, vec3 v, float nv) {
 
 // Filtered importance sampling (twin: `specular_quadrature`): the weighted mean of the lookups
 // times the directional albedo A(nv), Σ w·L / Σ w · A(nv), exact in a white furnace at every nv.
-vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv, int samples) {
+vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv, int samples, int base) {
     vec3 tangent, bitangent;
     incidence_frame(n, v, nv, tangent, bitangent);
     float m2 = p.beckmann_m * p.beckmann_m;
@@ -357,7 +388,7 @@ vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv, int samples) {
             // 2πβ² covers 1/(samples·pdf).
             float pdf = rest / (4.0 * PI * m2 * cos_h * cos_h * cos_h * vh);
             float beta = sqrt(1.0 / (2.0 * PI * float(samples) * pdf));
-            add_lookup(p, n, v, nv, h, vh, 1.0, beta, sum, weights);
+            add_lookup(p, n, v, nv, h, vh, 1.0, beta, base, sum, weights);
         }
     }
     return normalized_lookups(p, nv, sum, weights);
@@ -369,18 +400,30 @@ vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv, int samples) {
 // for filtered importance sampling; the grid serves the points the camera sees (samples ≥
 // ENV_SAMPLES), not a path's hits (twin: `brdf_specular`).
 vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv, int samples) {
-    vec3 shares = quadrature_shares(p.beckmann_m, samples >= ENV_SAMPLES);
+    bool camera = samples >= ENV_SAMPLES;
+    vec3 shares = quadrature_shares(p.beckmann_m, camera);
+    // Where the camera looks the grid and filtered importance sampling read the rough split; at
+    // a path's hit filtered importance sampling reads the lattice's.
+    int rough_base = camera ? frame.env_rough.x : 0;
+    float rough_share = camera ? shares.y + shares.z : 0.0;
     vec3 lookups = vec3(0.0);
     if (shares.x > 0.0) {
         lookups += shares.x * specular_lattice(p, n, v, nv);
     }
     if (shares.y > 0.0) {
-        lookups += shares.y * specular_grid(p, n, v, nv);
+        lookups += shares.y * specular_grid(p, n, v, nv, rough_base);
     }
     if (shares.z > 0.0) {
-        lookups += shares.z * specular_fis(p, n, v, nv, samples);
+        lookups += shares.z * specular_fis(p, n, v, nv, samples, rough_base);
     }
-    return lookups + bright_specular(p, n, v, nv);
+    vec3 bright = vec3(0.0);
+    if (rough_share < 1.0) {
+        bright += (1.0 - rough_share) * bright_specular(p, n, v, nv);
+    }
+    if (rough_share > 0.0) {
+        bright += rough_share * rough_bright_specular(p, n, v, nv);
+    }
+    return lookups + bright;
 }
 
 #endif

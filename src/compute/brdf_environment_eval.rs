@@ -60,12 +60,13 @@ pub fn brdf_environment_specular_gpu(
         &BINDINGS,
         constants.words(),
     )?;
-    // The draw's sources: an attached bright split's residual and lights, else the map itself.
-    let (residual, lights) = env.brdf_sources();
+    // The draw's sources: an attached bright split's residuals and lights, else the map itself.
+    let sources = env.brdf_sources(gpu)?;
     let mut frame = Frame::zeroed();
-    frame.environment = [1, residual.layers.len() as i32, 0, 0];
-    frame.set_environment_layers(&residual.betas, &residual.layer_faces());
-    frame.set_bright_lights(lights);
+    frame.environment = [1, env.layers.len() as i32, 0, 0];
+    frame.set_environment_layers(&env.betas, &env.layer_faces());
+    frame.set_bright_lights(sources.lights);
+    frame.set_rough_split(sources.rough_lights, sources.rough_first_texel);
     frame.set_brdf_quadrature();
     let mut knots = fresnel_knots(fresnel);
     let material = ObjectMaterial {
@@ -115,7 +116,7 @@ pub fn brdf_environment_specular_gpu(
     dirs_buf.write(&directions)?;
     let values_buf =
         gpu.create_buffer(BufferDesc::readback("env eval values", (rows * 16) as u64))?;
-    let texels = residual.layer_texels(gpu)?;
+    let texels = sources.texels;
     let set = gpu.create_descriptor_set(
         pipeline.layout(),
         &[

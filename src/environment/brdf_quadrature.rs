@@ -417,20 +417,50 @@ pub fn bright_specular(
     sum
 }
 
-/// The `brdf` model's specular term as the renderer computes it: the bright lights plus the
-/// lookups of the residual's layers (`sources` from the map's bright split; a map without bright
-/// parts is its own residual, with no lights) by the lattice, the grid, filtered importance
-/// sampling with `samples` samples, or two of them blended, as [`quadrature_shares`] says for the
-/// material's m. The grid serves the points the camera sees (`samples` ≥ `BRDF_SAMPLES`); with
-/// fewer samples (a path's hit) filtered importance sampling takes its share.
+/// What the `brdf` model reads on the CPU, as a draw does on the device
+/// (`GpuEnvironment::brdf_sources`): the bright split's residual layers and lights
+/// (`bright::split_bright`), and the rough split's (`bright::split_bright_rough`), whose layers
+/// the grid and filtered importance sampling read where the camera looks.
+#[derive(Clone, Copy)]
+pub struct BrdfSources<'a> {
+    pub residual: &'a PrefilteredEnvironment,
+    pub lights: &'a [BrightLight],
+    pub rough_residual: &'a PrefilteredEnvironment,
+    pub rough_lights: &'a [BrightLight],
+}
+
+impl<'a> BrdfSources<'a> {
+    /// A map read as it is, for every quadrature, with no lights (a map with no bright part).
+    pub fn unsplit(env: &'a PrefilteredEnvironment) -> Self {
+        Self {
+            residual: env,
+            lights: &[],
+            rough_residual: env,
+            rough_lights: &[],
+        }
+    }
+}
+
+/// The `brdf` model's specular term as the renderer computes it: lookups by the lattice, the
+/// grid, filtered importance sampling with `samples` samples, or two of them blended, as
+/// [`quadrature_shares`] says for the material's m, plus the bright lights. The grid serves the
+/// points the camera sees (`samples` ≥ `BRDF_SAMPLES`); with fewer samples (a path's hit)
+/// filtered importance sampling takes its share. Where the camera looks the grid and filtered
+/// importance sampling read the rough split and their share of the lights is the rough split's;
+/// the lattice, and everything at a path's hit, reads the bright split.
 pub fn brdf_specular(
-    (residual, lights): (&PrefilteredEnvironment, &[BrightLight]),
+    sources: BrdfSources<'_>,
     samples: u32,
     material: (&BrdfParams, &FresnelTable, &[[f32; 4]]),
     n: DVec3,
     v: DVec3,
 ) -> [f64; 3] {
-    let shares = quadrature_shares(material.0.beckmann_m, samples >= BRDF_SAMPLES);
+    let camera = samples >= BRDF_SAMPLES;
+    let shares = quadrature_shares(material.0.beckmann_m, camera);
+    let (rough, rough_share) = match camera {
+        true => (sources.rough_residual, shares[1] + shares[2]),
+        false => (sources.residual, 0.0),
+    };
     let mut lookups = [0.0; 3];
     let mut add = |share: f64, quadrature: &dyn Fn() -> [f64; 3]| {
         if share > 0.0 {
@@ -440,12 +470,25 @@ pub fn brdf_specular(
             }
         }
     };
-    add(shares[0], &|| specular_lattice(residual, material, n, v));
-    add(shares[1], &|| specular_grid(residual, material, n, v));
-    add(shares[2], &|| {
-        specular_quadrature(residual, samples, material, n, v)
+    add(shares[0], &|| {
+        specular_lattice(sources.residual, material, n, v)
     });
-    let bright = bright_specular(lights, material.0, material.1, n, v);
+    add(shares[1], &|| specular_grid(rough, material, n, v));
+    add(shares[2], &|| {
+        specular_quadrature(rough, samples, material, n, v)
+    });
+    let mut bright = [0.0; 3];
+    for (share, lights) in [
+        (1.0 - rough_share, sources.lights),
+        (rough_share, sources.rough_lights),
+    ] {
+        if share > 0.0 {
+            let term = bright_specular(lights, material.0, material.1, n, v);
+            for c in 0..3 {
+                bright[c] += share * term[c];
+            }
+        }
+    }
     std::array::from_fn(|c| lookups[c] + bright[c])
 }
 

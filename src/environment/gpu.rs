@@ -92,10 +92,69 @@ pub struct GpuEnvironment {
 }
 
 /// What the `brdf` model reads of a map (bright.rs): the residual's layers, and the bright parts
-/// taken out of it as directional lights (world frame).
+/// taken out of it as directional lights (world frame); and the same for the rough materials'
+/// split (`split_bright_rough`: every bright block a light), which the grid and filtered
+/// importance sampling read where the camera looks.
 pub struct BrightEnvironment {
-    pub residual: GpuEnvironment,
-    pub lights: Vec<BrightLight>,
+    residual: GpuEnvironment,
+    lights: Vec<BrightLight>,
+    rough_residual: GpuEnvironment,
+    rough_lights: Vec<BrightLight>,
+    /// The residual's layer texels, then the rough residual's: [`BrightEnvironment::texels`].
+    texels: std::sync::OnceLock<Buffer>,
+}
+
+impl BrightEnvironment {
+    /// The two splits of one map. Both residuals must have the same layers (β and face sizes):
+    /// the lookups read them through one layer table.
+    pub fn new(
+        (residual, lights): (GpuEnvironment, Vec<BrightLight>),
+        (rough_residual, rough_lights): (GpuEnvironment, Vec<BrightLight>),
+    ) -> Result<Self> {
+        same_layers(&residual, &rough_residual, "the rough split's residual")?;
+        Ok(Self {
+            residual,
+            lights,
+            rough_residual,
+            rough_lights,
+            texels: std::sync::OnceLock::new(),
+        })
+    }
+
+    /// The residual's and then the rough residual's layer texels in one texel buffer, made on
+    /// first use and kept.
+    fn texels(&self, gpu: &GpuContext) -> Result<&Buffer> {
+        if let Some(buffer) = self.texels.get() {
+            return Ok(buffer);
+        }
+        let buffer = concatenated_texels(gpu, &[&self.residual, &self.rough_residual])?;
+        let _ = self.texels.set(buffer);
+        self.texels
+            .get()
+            .ok_or_else(|| Error::Internal("the layer texel buffer was not kept".into()))
+    }
+}
+
+/// `Err` unless `theirs` has `ours`'s layers (the same β and face sizes).
+fn same_layers(ours: &GpuEnvironment, theirs: &GpuEnvironment, what: &str) -> Result<()> {
+    let (our_faces, their_faces) = (ours.layer_faces(), theirs.layer_faces());
+    if theirs.betas != ours.betas || our_faces != their_faces {
+        return Err(Error::Internal(format!(
+            "{what} has layers β {:?} at faces {their_faces:?}, the map β {:?} at faces \
+             {our_faces:?}: prefilter both with the same parameters",
+            theirs.betas, ours.betas
+        )));
+    }
+    Ok(())
+}
+
+/// What the `brdf` model's shaders read of a map: the layer texels (the residual's, then the
+/// rough residual's from `rough_first_texel`), and the two splits' lights.
+pub struct BrdfSources<'a> {
+    pub texels: &'a Buffer,
+    pub rough_first_texel: u64,
+    pub lights: &'a [BrightLight],
+    pub rough_lights: &'a [BrightLight],
 }
 
 /// The index of each layer's first texel when the layers of `faces` are stored one after the
@@ -143,25 +202,41 @@ impl GpuEnvironment {
     /// Attaches the map's bright split (the first one attached stays). The residual must have
     /// this map's layers (the same β and face sizes): a draw reads both through one layer table.
     pub fn attach_bright(&self, bright: BrightEnvironment) -> Result<()> {
-        let (ours, theirs) = (self.layer_faces(), bright.residual.layer_faces());
-        if bright.residual.betas != self.betas || ours != theirs {
-            return Err(Error::Internal(format!(
-                "the bright split's residual has layers β {:?} at faces {theirs:?}, the map β {:?} \
-                 at faces {ours:?}: prefilter both with the same parameters",
-                bright.residual.betas, self.betas
-            )));
-        }
+        same_layers(self, &bright.residual, "the bright split's residual")?;
         let _ = self.bright.set(Box::new(bright));
         Ok(())
     }
 
-    /// What the `brdf` model's lookups read and the lights it adds: the attached split's residual
-    /// and lights, or without one this map itself and no lights (an environment uploaded by hand,
-    /// as tests do, or one with no bright part).
-    pub fn brdf_sources(&self) -> (&GpuEnvironment, &[BrightLight]) {
+    /// What the `brdf` model's lookups read and the lights it adds: the attached splits'
+    /// residuals and lights, or without them this map itself for both and no lights (an
+    /// environment uploaded by hand, as tests do).
+    pub fn brdf_sources(&self, gpu: &GpuContext) -> Result<BrdfSources<'_>> {
+        Ok(match self.bright.get() {
+            Some(bright) => BrdfSources {
+                texels: bright.texels(gpu)?,
+                rough_first_texel: layer_texel_offsets(bright.residual.layer_faces()).1,
+                lights: &bright.lights,
+                rough_lights: &bright.rough_lights,
+            },
+            None => BrdfSources {
+                texels: self.layer_texels(gpu)?,
+                rough_first_texel: 0,
+                lights: &[],
+                rough_lights: &[],
+            },
+        })
+    }
+
+    /// The lights of [`brdf_sources`](Self::brdf_sources) and where the rough residual's
+    /// texels start, without making the texel buffer: (lights, rough lights, rough first texel).
+    pub fn brdf_lights(&self) -> (&[BrightLight], &[BrightLight], u64) {
         match self.bright.get() {
-            Some(bright) => (&bright.residual, &bright.lights),
-            None => (self, &[]),
+            Some(bright) => (
+                &bright.lights,
+                &bright.rough_lights,
+                layer_texel_offsets(bright.residual.layer_faces()).1,
+            ),
+            None => (&[], &[], 0),
         }
     }
 
@@ -177,44 +252,53 @@ impl GpuEnvironment {
         if let Some(buffer) = self.layer_texels.get() {
             return Ok(buffer);
         }
-        let (offsets, total) = layer_texel_offsets(self.layer_faces());
-        let limit = u64::from(gpu.info().max_texel_buffer_elements).min(i32::MAX as u64);
-        if total > limit {
-            return Err(Error::invalid(
-                "environment_model",
-                "brdf",
-                format!(
-                    "the `brdf` model reads the environment's {total} layer texels from one \
-                     texel buffer, and this device holds at most {limit}; use a smaller \
-                     environment face size, or the `paper` model"
-                ),
-            ));
-        }
-        let buffer = gpu.create_buffer(BufferDesc::device_local(
-            "environment layer texels",
-            total * 16,
-            BufferUsage::UNIFORM_TEXEL | BufferUsage::TRANSFER_DST,
-        ))?;
-        let sampled = ImageUse::new(Access::GraphicsShaderRead, Layout::ShaderRead);
-        let transfer_src = ImageUse::new(Access::TransferRead, Layout::TransferSrc);
-        gpu.submit_and_wait(|rec| {
-            for (image, &first) in self.layers.iter().zip(&offsets) {
-                // Draws may have sampled the image; it goes back to being sampled after.
-                rec.image_barrier(image, sampled, transfer_src);
-                rec.copy_image_rows_to_buffer(image, image.desc().height, &buffer, first * 16);
-                rec.image_barrier(image, transfer_src, sampled);
-            }
-            // The draws (and the compute evaluator) that read the buffer are later submits; the
-            // barriers make the copy's writes visible to their shaders.
-            rec.memory_barrier(Access::TransferWrite, Access::GraphicsShaderRead);
-            rec.memory_barrier(Access::TransferWrite, Access::ComputeShaderRead);
-            Ok(())
-        })?;
+        let buffer = concatenated_texels(gpu, &[self])?;
         let _ = self.layer_texels.set(buffer);
         self.layer_texels
             .get()
             .ok_or_else(|| Error::Internal("the layer texel buffer was not kept".into()))
     }
+}
+
+/// The layers of `envs`, one environment after the other, in one device-local texel buffer
+/// (layer k of the first from `layer_texel_offsets(layer_faces())[k]`), copied from the images.
+/// Refused when the device's texel buffers cannot hold them all.
+fn concatenated_texels(gpu: &GpuContext, envs: &[&GpuEnvironment]) -> Result<Buffer> {
+    let layers: Vec<&Image> = envs.iter().flat_map(|env| env.layers.iter()).collect();
+    let (offsets, total) = layer_texel_offsets(layers.iter().map(|image| image.desc().width));
+    let limit = u64::from(gpu.info().max_texel_buffer_elements).min(i32::MAX as u64);
+    if total > limit {
+        return Err(Error::invalid(
+            "environment_model",
+            "brdf",
+            format!(
+                "the `brdf` model reads the environment's {total} layer texels from one \
+                 texel buffer, and this device holds at most {limit}; use a smaller \
+                 environment face size, or the `paper` model"
+            ),
+        ));
+    }
+    let buffer = gpu.create_buffer(BufferDesc::device_local(
+        "environment layer texels",
+        total * 16,
+        BufferUsage::UNIFORM_TEXEL | BufferUsage::TRANSFER_DST,
+    ))?;
+    let sampled = ImageUse::new(Access::GraphicsShaderRead, Layout::ShaderRead);
+    let transfer_src = ImageUse::new(Access::TransferRead, Layout::TransferSrc);
+    gpu.submit_and_wait(|rec| {
+        for (image, &first) in layers.iter().zip(&offsets) {
+            // Draws may have sampled the image; it goes back to being sampled after.
+            rec.image_barrier(image, sampled, transfer_src);
+            rec.copy_image_rows_to_buffer(image, image.desc().height, &buffer, first * 16);
+            rec.image_barrier(image, transfer_src, sampled);
+        }
+        // The draws (and the compute evaluator) that read the buffer are later submits; the
+        // barriers make the copy's writes visible to their shaders.
+        rec.memory_barrier(Access::TransferWrite, Access::GraphicsShaderRead);
+        rec.memory_barrier(Access::TransferWrite, Access::ComputeShaderRead);
+        Ok(())
+    })?;
+    Ok(buffer)
 }
 
 impl GpuPrefilter {

@@ -17,7 +17,7 @@
 use std::borrow::Cow;
 use std::sync::Arc;
 
-use super::bright::split_bright;
+use super::bright::{split_bright, split_bright_rough, BrightLight, BrightSplit};
 use super::disk_cache::{CacheKey, EnvironmentDiskCache};
 use super::gpu::{model_params, BrightEnvironment, GpuEnvironment, GpuPrefilter};
 use super::image::Equirect;
@@ -159,11 +159,13 @@ impl EnvironmentPreparer {
         light: EnvironmentLight,
         warnings: &mut Vec<Warning>,
     ) -> Result<BrightEnvironment> {
-        let split = split_bright(image);
-        let lights = split.lights_in_world(light);
-        let params = model_params(gpu, split.residual.width, EnvironmentModel::Brdf);
-        let residual = self.prepare_image(gpu, &split.residual, (light, &params), warnings)?;
-        Ok(BrightEnvironment { residual, lights })
+        let params = model_params(gpu, image.width, EnvironmentModel::Brdf);
+        let mut part = |split: BrightSplit| -> Result<(GpuEnvironment, Vec<BrightLight>)> {
+            let lights = split.lights_in_world(light);
+            let residual = self.prepare_image(gpu, &split.residual, (light, &params), warnings)?;
+            Ok((residual, lights))
+        };
+        BrightEnvironment::new(part(split_bright(image))?, part(split_bright_rough(image))?)
     }
 
     fn prepare_image(

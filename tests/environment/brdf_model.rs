@@ -5,10 +5,11 @@ use glam::DVec3;
 use shikki::compute::brdf_environment_eval::brdf_environment_specular_gpu;
 use shikki::environment::brdf_definition::specular_integral_definition;
 use shikki::environment::brdf_quadrature::{
-    albedo_knots, brdf_specular, specular_quadrature, BRDF_SAMPLES,
+    albedo_knots, brdf_specular, specular_quadrature, BrdfSources, BRDF_SAMPLES,
 };
-use shikki::environment::bright::split_bright;
+use shikki::environment::bright::{split_bright, split_bright_rough, BrightLight};
 use shikki::environment::gpu::{BrightEnvironment, GpuEnvironment};
+use shikki::environment::PrefilteredEnvironment;
 use shikki::environment::{
     load_environment, prefilter_cpu, EnvironmentLight, EnvironmentModel, PrefilterParams,
 };
@@ -140,15 +141,23 @@ fn shader_matches_its_cpu_twin() {
     // (the courtyard has more bright pixels than lights: all MAX_ENV_LIGHTS are used).
     let split = split_bright(&source);
     assert_eq!(split.lights.len(), MAX_ENV_LIGHTS);
-    let lights = split.lights_in_world(light);
-    let residual = prefilter_cpu(&split.residual, &prefilter, light).unwrap();
+    let split = Split::of(&split, &prefilter, light);
+    // The rough split: every bright block a light (97 on the courtyard, in blocks 8 px wide).
+    let rough = split_bright_rough(&source);
+    assert!(
+        rough.lights.len() > MAX_ENV_LIGHTS,
+        "{}",
+        rough.lights.len()
+    );
+    let rough = Split::of(&rough, &prefilter, light);
     let full = prefilter_cpu(&source, &prefilter, light).unwrap();
     let on_gpu = GpuEnvironment::upload(&gpu, &full).unwrap();
+    let upload = |part: &Split| {
+        let residual = GpuEnvironment::upload(&gpu, &part.residual).unwrap();
+        (residual, part.lights.clone())
+    };
     on_gpu
-        .attach_bright(BrightEnvironment {
-            residual: GpuEnvironment::upload(&gpu, &residual).unwrap(),
-            lights: lights.clone(),
-        })
+        .attach_bright(BrightEnvironment::new(upload(&split), upload(&rough)).unwrap())
         .unwrap();
     let pairs = test_pairs();
     // The lattice (0.02, 0.05), its blend into the grid (0.065), the grid (0.14, 0.2), the grid's
@@ -158,23 +167,50 @@ fn shader_matches_its_cpu_twin() {
     // (1.5e-4 and 8e-5 measured; BENCHMARKS.md).
     for m in [0.02, 0.05, 0.065, 0.14, 0.2, 0.26, 0.5] {
         let p = params(m);
-        let worst = worst_gpu_vs_twin(&gpu, &on_gpu, (&residual, &lights), &p, &pairs);
+        let worst = worst_gpu_vs_twin(&gpu, &on_gpu, split.sources(&rough), &p, &pairs);
         println!("m {m}: worst relative GPU vs twin {worst:.2e}");
         assert!(worst <= 1e-4, "m {m}: {worst}");
     }
     crate::common::assert_no_validation_messages(&gpu);
 }
 
+/// One bright split of a map as the twin reads it: the residual's CPU layers and the lights in the
+/// world.
+struct Split {
+    residual: PrefilteredEnvironment,
+    lights: Vec<BrightLight>,
+}
+
+impl Split {
+    fn of(
+        split: &shikki::environment::bright::BrightSplit,
+        prefilter: &PrefilterParams,
+        light: EnvironmentLight,
+    ) -> Self {
+        Split {
+            residual: prefilter_cpu(&split.residual, prefilter, light).unwrap(),
+            lights: split.lights_in_world(light),
+        }
+    }
+
+    /// This split and `rough` as the `brdf` model reads them.
+    fn sources<'a>(&'a self, rough: &'a Split) -> BrdfSources<'a> {
+        BrdfSources {
+            residual: &self.residual,
+            lights: &self.lights,
+            rough_residual: &rough.residual,
+            rough_lights: &rough.lights,
+        }
+    }
+}
+
 /// The shader's `brdf` specular term (compute evaluator, `env` as a draw reads it) against the
-/// twin on `twin` (the residual's CPU layers and the lights), worst relative difference over the
+/// twin on `twin` (the CPU layers and lights of both splits), worst relative difference over the
 /// pairs and channels (a floor of 1e-6 for channels near 0).
 fn worst_gpu_vs_twin(
     gpu: &shikki::gpu::GpuContext,
     env: &GpuEnvironment,
-    twin: (
-        &shikki::environment::PrefilteredEnvironment,
-        &[shikki::environment::bright::BrightLight],
-    ),
+    twin: BrdfSources<'_>,
     p: &BrdfParams,
     pairs: &[[DVec3; 2]],
 ) -> f64 {
@@ -227,18 +263,22 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 }
 
 /// The renderer's `brdf` specular term (the map's bright lights plus BRDF_SAMPLES lookups of the
-/// residual's layers) against the brute-force integral over the whole map, on the courtyard HDRI
-/// and the disc map, for m = 0.02, 0.05, 0.2, 0.5: the figures of BENCHMARKS.md ("The `brdf`
-/// environment model"). The issue asks for ≤ 1 % mean and ≤ 5 % p99: the disc map meets it at
-/// every m (the split took the disc out of the lookups) and is held to it; the courtyard does not
-/// (its error is the lookups' aliasing of the buildings' edges, BENCHMARKS.md: 2–3 % mean), so
-/// every mean is also held to at most 1.25× its measured value, which catches a regression (the
-/// estimator is deterministic: the same build gives the same figures).
+/// residuals' layers, the rough split's for the grid and filtered importance sampling) against
+/// the brute-force integral over the whole map, on the courtyard and studio HDRIs and the disc
+/// map, for m = 0.02, 0.05, 0.2, 0.5: the figures of BENCHMARKS.md ("The `brdf` environment
+/// model"). The issue asks for ≤ 1 % mean and ≤ 5 % p99: the disc map meets it at every m (the
+/// split took the disc out of the lookups) and is held to it; the courtyard and the studio do
+/// not (the lookups' aliasing of sharp edges, BENCHMARKS.md: 1–4 % mean), so every mean is also
+/// held to at most 1.25× its measured value, which catches a regression (the estimator is
+/// deterministic: the same build gives the same figures). The studio's rough means (1.11 %,
+/// 1.58 %) were 4.26 % and 14.0 % before the rough split: its light boxes stayed in the layers.
 #[test]
 fn error_at_the_render_sample_count() {
     let courtyard = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/courtyard.hdr");
+    let studio = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/studio.hdr");
     let maps = [
         ("courtyard", load_environment(courtyard).unwrap().image),
+        ("studio", load_environment(studio).unwrap().image),
         ("disc", disc_map()),
     ];
     let fresnel = FresnelTable::dielectric(1.5, 0.0045).unwrap();
@@ -246,14 +286,14 @@ fn error_at_the_render_sample_count() {
     let pairs = accuracy_pairs();
     // Measured means (green, relative) per map and m = 0.02, 0.05, 0.2, 0.5; see the doc comment.
     let measured = [
-        [0.0276, 0.0208, 0.0133, 0.0291],
+        [0.0276, 0.0208, 0.0128, 0.0271],
+        [0.0272, 0.0386, 0.0111, 0.0158],
         [0.0017, 0.0018, 0.0006, 0.0037],
     ];
     for ((name, source), bounds) in maps.iter().zip(measured) {
         let prefilter = PrefilterParams::for_model(source.width, EnvironmentModel::Brdf);
-        let split = split_bright(source);
-        let lights = split.lights_in_world(light);
-        let residual = prefilter_cpu(&split.residual, &prefilter, light).unwrap();
+        let split = Split::of(&split_bright(source), &prefilter, light);
+        let rough = Split::of(&split_bright_rough(source), &prefilter, light);
         for (m, bound) in [0.02, 0.05, 0.2, 0.5].into_iter().zip(bounds) {
             let p = params(m);
             let albedo = albedo_knots(&p, &fresnel);
@@ -265,7 +305,7 @@ fn error_at_the_render_sample_count() {
                     let want =
                         specular_integral_definition(source, light, &p, &fresnel, n, v, cells);
                     let material = (&p, &fresnel, &albedo[..]);
-                    let got = brdf_specular((&residual, &lights), BRDF_SAMPLES, material, n, v);
+                    let got = brdf_specular(split.sources(&rough), BRDF_SAMPLES, material, n, v);
                     se += (got[1] - want[1]).powi(2);
                     sw += want[1].powi(2);
                     (got[1] - want[1]).abs() / want[1]
@@ -296,7 +336,7 @@ fn error_at_the_render_sample_count() {
 /// lattice's, the grid's or filtered importance sampling's weighted mean, normalised by the
 /// albedo table) is
 /// c·A(nv), which must equal c·∫f_spec·cos (the directional albedo, an independent half-vector
-/// quadrature) within 0.5 % at every N·V (the issue's bound). Measured 0.33 % worst: the albedo
+/// quadrature) within 0.5 % at every N·V (the issue's bound). Measured 0.44 % worst: the albedo
 /// table's interpolation between its knots.
 #[test]
 fn white_furnace_matches_the_directional_albedo() {
@@ -319,7 +359,8 @@ fn white_furnace_matches_the_directional_albedo() {
             let nv = 0.02 + 0.98 * f64::from(k) / 39.0;
             let v = DVec3::new((1.0 - nv * nv).sqrt(), 0.0, nv);
             let material = (&p, &fresnel, &albedo[..]);
-            let got = brdf_specular((&env, &[]), BRDF_SAMPLES, material, DVec3::Z, v);
+            let sources = BrdfSources::unsplit(&env);
+            let got = brdf_specular(sources, BRDF_SAMPLES, material, DVec3::Z, v);
             let want = specular_albedo(&p, &fresnel, nv, 2048, 256);
             for ch in 0..3 {
                 worst = worst.max((got[ch] - c * want[ch]).abs() / (c * want[ch]));
@@ -358,20 +399,20 @@ fn the_preparer_attaches_the_split_the_shader_reads() {
         )
         .unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");
-    let split = split_bright(&source);
-    assert!(!split.lights.is_empty());
-    assert_eq!(bright.lights, split.lights_in_world(light));
     let prefilter = PrefilterParams::for_model(source.width, EnvironmentModel::Brdf);
-    let residual = prefilter_cpu(&split.residual, &prefilter, light).unwrap();
+    let split = Split::of(&split_bright(&source), &prefilter, light);
+    let rough = Split::of(&split_bright_rough(&source), &prefilter, light);
+    assert!(!split.lights.is_empty());
     let full = prefilter_cpu(&source, &prefilter, light).unwrap();
     let on_gpu = GpuEnvironment::upload(&gpu, &full).unwrap();
     on_gpu.attach_bright(bright).unwrap();
-    let lights = split.lights_in_world(light);
+    let (lights, rough_lights, _) = on_gpu.brdf_lights();
+    assert_eq!(lights, &split.lights[..]);
+    assert_eq!(rough_lights, &rough.lights[..]);
     let pairs = test_pairs();
     for m in [0.05, 0.5] {
         let p = params(m);
-        let twin = (&residual, &lights[..]);
-        let worst = worst_gpu_vs_twin(&gpu, &on_gpu, twin, &p, &pairs);
+        let worst = worst_gpu_vs_twin(&gpu, &on_gpu, split.sources(&rough), &p, &pairs);
         println!("m {m}: worst relative, prepared split vs twin {worst:.2e}");
         assert!(worst <= 2e-3, "m {m}: {worst}");
     }

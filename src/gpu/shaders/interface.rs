@@ -20,6 +20,9 @@ shader_interface! {
         /// The most bright parts of a map the `brdf` model takes out as directional lights
         /// (environment/bright.rs; `Frame::env_light_direction`).
         MAX_ENV_LIGHTS: usize = 16;
+        /// The most lights of the rough materials' bright split (environment/bright.rs
+        /// `split_bright_rough`; `Frame::env_rough_light_*`).
+        ROUGH_MAX_ENV_LIGHTS: usize = 256;
         /// Knots of the specular directional albedo A(nv) the `brdf` model normalises by, at
         /// nv = (k/(ALBEDO_KNOTS − 1))² (environment/brdf_quadrature.rs `albedo_knots`).
         ALBEDO_KNOTS: usize = 65;
@@ -209,6 +212,13 @@ shader_interface! {
             env_grid: vec4,
             /// x: the lattice's blur share t (`LATTICE_BLUR_SHARE`).
             env_lattice_share: vec4,
+            /// The rough materials' bright split (environment/bright.rs `split_bright_rough`),
+            /// which the grid and filtered importance sampling read where the camera looks: x the
+            /// index of its residual's first texel at `ENV_LAYER_TEXELS_BINDING` (its layers are
+            /// laid out as the residual's, after them), y its number of lights.
+            env_rough: ivec4,
+            env_rough_light_direction: [vec4; ROUGH_MAX_ENV_LIGHTS],
+            env_rough_light_irradiance: [vec4; ROUGH_MAX_ENV_LIGHTS],
         }
 
         /// Step 1's push constants (equirect_to_cube*.comp).

@@ -14,7 +14,7 @@ use crate::environment::gpu::{layer_texel_offsets, GpuEnvironment};
 use crate::environment::params::ViewBlur;
 use crate::environment::EnvironmentModel;
 use crate::gpu::shaders::interface::{
-    Frame, ObjectMaterial, MAX_ENV_LAYERS, MAX_ENV_LIGHTS, MAX_LIGHTS,
+    Frame, ObjectMaterial, MAX_ENV_LAYERS, MAX_ENV_LIGHTS, MAX_LIGHTS, ROUGH_MAX_ENV_LIGHTS,
 };
 use crate::gpu::{Buffer, BufferUsage, GpuContext};
 use crate::model::{BrdfParams, FresnelTable};
@@ -92,6 +92,28 @@ pub(crate) struct EnvironmentUniforms {
     pub layer_faces: Vec<u32>,
     /// The `brdf` model's bright lights (world frame); empty in the `paper` model.
     pub bright_lights: Vec<BrightLight>,
+    /// The `brdf` model's rough split: its lights, and its residual's first layer texel.
+    pub rough_lights: Vec<BrightLight>,
+    pub rough_first_texel: u64,
+}
+
+impl EnvironmentUniforms {
+    /// The `brdf` model's lights and rough split of `environment` (none in `paper`); the other
+    /// fields empty.
+    fn bright(environment: &GpuEnvironment, model: EnvironmentModel) -> Self {
+        let (lights, rough_lights, rough_first_texel) = match model {
+            EnvironmentModel::Brdf => environment.brdf_lights(),
+            EnvironmentModel::Paper => (&[][..], &[][..], 0),
+        };
+        Self {
+            enabled: false,
+            layer_betas: Vec::new(),
+            layer_faces: Vec::new(),
+            bright_lights: lights.to_vec(),
+            rough_lights: rough_lights.to_vec(),
+            rough_first_texel,
+        }
+    }
 }
 
 fn vec4(v: glam::DVec3, w: f32) -> [f32; 4] {
@@ -153,6 +175,19 @@ impl Frame {
         }
     }
 
+    /// Packs the `brdf` model's rough split (at most `ROUGH_MAX_ENV_LIGHTS` lights, which
+    /// `bright::split_bright_rough` never exceeds): its lights and where its residual's texels
+    /// start; also used by the compute evaluator.
+    pub(crate) fn set_rough_split(&mut self, lights: &[BrightLight], first_texel: u64) {
+        let count = lights.len().min(ROUGH_MAX_ENV_LIGHTS);
+        // GpuEnvironment's texel buffers hold at most i32::MAX texels.
+        self.env_rough = [first_texel.min(i32::MAX as u64) as i32, count as i32, 0, 0];
+        for (i, light) in lights.iter().take(count).enumerate() {
+            self.env_rough_light_direction[i] = vec4(light.direction, 0.0);
+            self.env_rough_light_irradiance[i] = vec4(DVec3::from(light.irradiance), 0.0);
+        }
+    }
+
     /// Packs one draw's camera, lights and environment. `lights.len()` must be ≤ MAX_LIGHTS
     /// (checked by the renderer before this is called; extra lights are ignored here).
     pub(crate) fn new(
@@ -189,6 +224,7 @@ impl Frame {
         };
         frame.set_environment_layers(&environment.layer_betas, &environment.layer_faces);
         frame.set_bright_lights(&environment.bright_lights);
+        frame.set_rough_split(&environment.rough_lights, environment.rough_first_texel);
         frame.set_brdf_quadrature();
         for (i, light) in lights.iter().take(MAX_LIGHTS).enumerate() {
             let (vector, color) = match *light {
@@ -279,10 +315,7 @@ impl DrawBuffers {
                 enabled: scene.environment.is_some(),
                 layer_betas: environment.betas.clone(),
                 layer_faces: environment.layer_faces(),
-                bright_lights: match scene.environment_model {
-                    EnvironmentModel::Brdf => environment.brdf_sources().1.to_vec(),
-                    EnvironmentModel::Paper => Vec::new(),
-                },
+                ..EnvironmentUniforms::bright(environment, scene.environment_model)
             },
         );
         let mut knots: Vec<[f32; 4]> = Vec::new();

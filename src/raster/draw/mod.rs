@@ -424,7 +424,7 @@ fn draw_deferred(
     };
     // The `paper` model never reads the layer texels: any texel buffer fills the binding.
     let layer_texels = match scene.environment_model {
-        EnvironmentModel::Brdf => inputs.environment.brdf_sources().0.layer_texels(gpu)?,
+        EnvironmentModel::Brdf => inputs.environment.brdf_sources(gpu)?.texels,
         EnvironmentModel::Paper => &buffers.knots,
     };
     let object_sets = inputs.object_sets(&gbuffer, buffers)?;
