@@ -86,7 +86,7 @@ struct Block {
 /// kept stay in the residual as they are, so nothing is lost either way.
 pub fn split_bright(map: &Equirect) -> BrightSplit {
     let block = (map.width / BRIGHT_GRID_WIDTH).max(1);
-    split_in_blocks(map, block, MAX_ENV_LIGHTS)
+    split_in_blocks(map, bright_threshold(map), block, MAX_ENV_LIGHTS)
 }
 
 /// The split the rough materials' quadratures read (the grid's and filtered importance
@@ -95,12 +95,30 @@ pub fn split_bright(map: &Equirect) -> BrightSplit {
 /// at most `ROUGH_MAX_ENV_LIGHTS` of them; a block is then at most a few degrees across, small
 /// against those lobes (BENCHMARKS.md, "Where the remaining error is").
 pub fn split_bright_rough(map: &Equirect) -> BrightSplit {
-    let mut block = (map.width / BRIGHT_GRID_WIDTH).max(1);
     let threshold = bright_threshold(map);
-    while bright_blocks(map, block, threshold) > ROUGH_MAX_ENV_LIGHTS && block < map.width {
+    let bright: Vec<(u32, u32)> = (0..map.height)
+        .flat_map(|y| (0..map.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| is_bright(map.pixels[(y * map.width + x) as usize], threshold))
+        .collect();
+    // How many `block`-pixel blocks hold a bright pixel.
+    let blocks = |block: u32| {
+        let ids: std::collections::HashSet<(u32, u32)> = bright
+            .iter()
+            .map(|&(x, y)| (x / block, y / block))
+            .collect();
+        ids.len()
+    };
+    let mut block = (map.width / BRIGHT_GRID_WIDTH).max(1);
+    while blocks(block) > ROUGH_MAX_ENV_LIGHTS && block < map.width {
         block *= 2;
     }
-    split_in_blocks(map, block, ROUGH_MAX_ENV_LIGHTS)
+    split_in_blocks(map, threshold, block, ROUGH_MAX_ENV_LIGHTS)
+}
+
+/// Whether pixel `p` is bright. Written so that a NaN pixel (load replaces them) or a zero
+/// threshold is not bright.
+fn is_bright(p: [f32; 3], threshold: f64) -> bool {
+    threshold > 0.0 && luminance(p) > threshold
 }
 
 /// The luminance above which a pixel of `map` is bright: `BRIGHT_THRESHOLD` × the map's mean
@@ -117,26 +135,10 @@ fn bright_threshold(map: &Equirect) -> f64 {
     BRIGHT_THRESHOLD * total / (4.0 * PI)
 }
 
-/// How many `block`-pixel blocks hold a bright pixel.
-fn bright_blocks(map: &Equirect, block: u32, threshold: f64) -> usize {
+/// The split with `block`-pixel blocks and at most `max_lights` lights (see [`split_bright`]),
+/// bright above `threshold` ([`bright_threshold`]).
+fn split_in_blocks(map: &Equirect, threshold: f64, block: u32, max_lights: usize) -> BrightSplit {
     let (w, h) = (map.width, map.height);
-    let blocks_x = w.div_ceil(block);
-    let mut seen = std::collections::HashSet::new();
-    for y in 0..h {
-        for x in 0..w {
-            let y_lum = luminance(map.pixels[(y * w + x) as usize]);
-            if threshold > 0.0 && y_lum > threshold {
-                seen.insert((y / block) * blocks_x + x / block);
-            }
-        }
-    }
-    seen.len()
-}
-
-/// The split with `block`-pixel blocks and at most `max_lights` lights (see [`split_bright`]).
-fn split_in_blocks(map: &Equirect, block: u32, max_lights: usize) -> BrightSplit {
-    let (w, h) = (map.width, map.height);
-    let threshold = bright_threshold(map);
     let blocks_x = w.div_ceil(block);
     let mut blocks: Vec<(u32, Block)> = Vec::new();
     let mut slots: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
@@ -145,11 +147,10 @@ fn split_in_blocks(map: &Equirect, block: u32, max_lights: usize) -> BrightSplit
         for x in 0..w {
             let index = (y * w + x) as usize;
             let p = map.pixels[index];
-            let y_lum = luminance(p);
-            // Written so that a NaN pixel (load replaces them) or a zero threshold is not bright.
-            if !(threshold > 0.0 && y_lum > threshold) {
+            if !is_bright(p, threshold) {
                 continue;
             }
+            let y_lum = luminance(p);
             let keep = threshold / y_lum;
             let kept = p.map(|c| (f64::from(c) * keep) as f32);
             let excess: [f64; 3] =

@@ -124,14 +124,7 @@ impl BrightEnvironment {
     /// The residual's and then the rough residual's layer texels in one texel buffer, made on
     /// first use and kept.
     fn texels(&self, gpu: &GpuContext) -> Result<&Buffer> {
-        if let Some(buffer) = self.texels.get() {
-            return Ok(buffer);
-        }
-        let buffer = concatenated_texels(gpu, &[&self.residual, &self.rough_residual])?;
-        let _ = self.texels.set(buffer);
-        self.texels
-            .get()
-            .ok_or_else(|| Error::Internal("the layer texel buffer was not kept".into()))
+        kept_texels(&self.texels, gpu, &[&self.residual, &self.rough_residual])
     }
 }
 
@@ -211,19 +204,16 @@ impl GpuEnvironment {
     /// residuals and lights, or without them this map itself for both and no lights (an
     /// environment uploaded by hand, as tests do).
     pub fn brdf_sources(&self, gpu: &GpuContext) -> Result<BrdfSources<'_>> {
-        Ok(match self.bright.get() {
-            Some(bright) => BrdfSources {
-                texels: bright.texels(gpu)?,
-                rough_first_texel: layer_texel_offsets(bright.residual.layer_faces()).1,
-                lights: &bright.lights,
-                rough_lights: &bright.rough_lights,
-            },
-            None => BrdfSources {
-                texels: self.layer_texels(gpu)?,
-                rough_first_texel: 0,
-                lights: &[],
-                rough_lights: &[],
-            },
+        let (lights, rough_lights, rough_first_texel) = self.brdf_lights();
+        let texels = match self.bright.get() {
+            Some(bright) => bright.texels(gpu)?,
+            None => self.layer_texels(gpu)?,
+        };
+        Ok(BrdfSources {
+            texels,
+            rough_first_texel,
+            lights,
+            rough_lights,
         })
     }
 
@@ -249,15 +239,22 @@ impl GpuEnvironment {
     /// `layer_texel_offsets(layer_faces())[k]`), copied from the images on first use and kept.
     /// Refused when the device's texel buffers cannot hold them all.
     pub fn layer_texels(&self, gpu: &GpuContext) -> Result<&Buffer> {
-        if let Some(buffer) = self.layer_texels.get() {
-            return Ok(buffer);
-        }
-        let buffer = concatenated_texels(gpu, &[self])?;
-        let _ = self.layer_texels.set(buffer);
-        self.layer_texels
-            .get()
-            .ok_or_else(|| Error::Internal("the layer texel buffer was not kept".into()))
+        kept_texels(&self.layer_texels, gpu, &[self])
     }
+}
+
+/// The buffer `kept` holds, or [`concatenated_texels`] of `envs` made now and kept there.
+fn kept_texels<'a>(
+    kept: &'a std::sync::OnceLock<Buffer>,
+    gpu: &GpuContext,
+    envs: &[&GpuEnvironment],
+) -> Result<&'a Buffer> {
+    if let Some(buffer) = kept.get() {
+        return Ok(buffer);
+    }
+    let _ = kept.set(concatenated_texels(gpu, envs)?);
+    kept.get()
+        .ok_or_else(|| Error::Internal("the layer texel buffer was not kept".into()))
 }
 
 /// The layers of `envs`, one environment after the other, in one device-local texel buffer

@@ -97,25 +97,6 @@ pub(crate) struct EnvironmentUniforms {
     pub rough_first_texel: u64,
 }
 
-impl EnvironmentUniforms {
-    /// The `brdf` model's lights and rough split of `environment` (none in `paper`); the other
-    /// fields empty.
-    fn bright(environment: &GpuEnvironment, model: EnvironmentModel) -> Self {
-        let (lights, rough_lights, rough_first_texel) = match model {
-            EnvironmentModel::Brdf => environment.brdf_lights(),
-            EnvironmentModel::Paper => (&[][..], &[][..], 0),
-        };
-        Self {
-            enabled: false,
-            layer_betas: Vec::new(),
-            layer_faces: Vec::new(),
-            bright_lights: lights.to_vec(),
-            rough_lights: rough_lights.to_vec(),
-            rough_first_texel,
-        }
-    }
-}
-
 fn vec4(v: glam::DVec3, w: f32) -> [f32; 4] {
     [v.x as f32, v.y as f32, v.z as f32, w]
 }
@@ -305,6 +286,10 @@ impl DrawBuffers {
         environment: &GpuEnvironment,
         (object_knots, object_albedo, scene_radius): (&[Knots], &[Knots], f64),
     ) -> Result<Frame> {
+        let (lights, rough_lights, rough_first_texel) = match scene.environment_model {
+            EnvironmentModel::Brdf => environment.brdf_lights(),
+            EnvironmentModel::Paper => (&[][..], &[][..], 0),
+        };
         let mut frame = Frame::new(
             scene.camera,
             settings.width,
@@ -315,7 +300,9 @@ impl DrawBuffers {
                 enabled: scene.environment.is_some(),
                 layer_betas: environment.betas.clone(),
                 layer_faces: environment.layer_faces(),
-                ..EnvironmentUniforms::bright(environment, scene.environment_model)
+                bright_lights: lights.to_vec(),
+                rough_lights: rough_lights.to_vec(),
+                rough_first_texel,
             },
         );
         let mut knots: Vec<[f32; 4]> = Vec::new();
