@@ -17,11 +17,13 @@
 // own cube filtering leaves the edges and corners to the implementation.
 //
 // The layers it reads are the residual of the map's bright split (environment/bright.rs); the
-// bright parts come back as the frame's `env_light_*` lights, evaluated exactly (`bright_specular`).
-// Where the camera looks, the grid and filtered importance sampling read the rough split instead
-// (`split_bright_rough`: every bright block a light, so no light box is left in the layers for a
-// wide lobe's tails to meet): its residual's texels from `frame.env_rough.x`, its lights
-// `env_rough_light_*`.
+// bright parts come back as the frame's `env_light_*` lights, each through the lobe widened by its
+// spread (`bright_specular`). Where the camera looks, the grid and filtered importance sampling
+// read the rough split instead (`split_bright_rough`: every bright block a light, so no light box
+// is left in the layers for a lobe's tails to meet), and so does the lattice from
+// `frame.env_lattice_share.y` up: its residual's texels from `frame.env_rough.x`, its lights
+// `env_rough_light_*`, which a narrow lobe visits through their direction bins
+// (`binned_rough_bright_specular`).
 //
 // The includer includes frame.glsl and lacquer_brdf.glsl first and binds ENV_LAYER_TEXELS_BINDING.
 
@@ -153,12 +155,46 @@ vec3 albedo_at(int first, float nv) {
     return a + (b - a) * t;
 }
 
+// D convolved with a light's spread σ² (twin: brdf_quadrature.rs `spread_beckmann_d`, whose
+// doc derives it): in slope space, m_x² = m² + σ²/2 along the plane of V and l, m_y² = m² +
+// σ²/(2·(V·H)²) across it; c = N × H. Written over b = m_y²·(V·H)² so that it divides twice.
+float spread_beckmann_d(float m, float spread, vec3 n, vec3 v, vec3 l, float nh, float vh, vec3 c) {
+    float nh2 = nh * nh;
+    vec3 across = cross(v, l);
+    float ne = dot(n, across);
+    float ne2 = ne * ne;
+    // tan²θ_H and its part across the plane, y² = (N·e)²/(1 − (N·e)²), e = across/|across|,
+    // over the common denominator nh²·(|across|² − (N·e)²·|across|²).
+    // V ∥ l (no plane; H = V): all of tan²θ_H along, over nh² alone.
+    float rest = dot(across, across) - ne2;
+    bool plane = rest > 0.0;
+    float den = plane ? nh2 * rest : nh2;
+    float tan2_den = plane ? dot(c, c) * rest : dot(c, c);
+    float y2_den = plane ? min(ne2 * nh2, tan2_den) : 0.0;
+    float x2_den = tan2_den - y2_den;
+    float m2 = m * m;
+    float mx2 = m2 + 0.5 * spread;
+    float vh2 = vh * vh;
+    float b = m2 * vh2 + 0.5 * spread;
+    float q = mx2 * b;
+    return vh * exp(-(x2_den * b + y2_den * mx2 * vh2) / (den * q)) / (PI * sqrt(q) * nh2 * nh2);
+}
+
+// cos 2θ_max for a light of spread σ²: tan²θ_max = BRIGHT_LOBE_CULL·(m² + σ²/2), the slopes where
+// the widened D is above e^-9 of its peak, without trigonometry (twin: brdf_quadrature.rs
+// `light_cull_cos`, and light_bins.rs relies on it).
+float light_cull_cos(LacquerParams p, float spread) {
+    float t2 = float(BRIGHT_LOBE_CULL) * (p.beckmann_m * p.beckmann_m + 0.5 * spread);
+    return (1.0 - t2) / (1.0 + t2);
+}
+
 // One of the map's bright parts, taken out of the layers as a directional light (environment/
-// bright.rs): f_spec·E·(N·l) = F·D·G·E/(4·nv), exact; 0 for a light beyond `cull_cos` of the
-// mirror direction r (`bright_cull_cos`).
-vec3 bright_light(LacquerParams p, vec3 n, vec3 v, float nv, vec3 r, float cull_cos, vec3 l,
-    vec3 irradiance) {
-    if (dot(r, l) < cull_cos) {
+// bright.rs; xyz towards it and w its spread σ², rgb its irradiance): f_spec·E·(N·l) =
+// F·D'·G·E/(4·nv) with D' the lobe widened by the spread; 0 for a light beyond `light_cull_cos`
+// of the mirror direction r (twin: brdf_quadrature.rs `bright_light`).
+vec3 bright_light(LacquerParams p, vec3 n, vec3 v, float nv, vec3 r, vec4 light, vec4 irradiance) {
+    vec3 l = light.xyz;
+    if (dot(r, l) < light_cull_cos(p, light.w)) {
         return vec3(0.0);
     }
     float nl = dot(n, l);
@@ -169,35 +205,23 @@ vec3 bright_light(LacquerParams p, vec3 n, vec3 v, float nv, vec3 r, float cull_
     }
     vec3 h = half_sum / half_len;
     float nh = dot(n, h);
-    // A light this far outside the lobe has D below e^-50 of its peak: a term under f32's
-    // resolution of any pixel it could be added to, skipped before the Fresnel table and exp.
-    vec3 c = cross(n, h);
-    if (nh <= 0.0 || dot(c, c) > 50.0 * p.beckmann_m * p.beckmann_m * nh * nh) {
+    float vh = dot(v, h);
+    if (nh <= 0.0 || vh <= 0.0) {
         return vec3(0.0);
     }
-    float vh = dot(v, h);
-    float d = beckmann_d(n, h, nh, p.beckmann_m);
+    float d = spread_beckmann_d(p.beckmann_m, light.w, n, v, l, nh, vh, cross(n, h));
     float g = cook_torrance_g(nh, nv, nl, vh);
-    vec3 f = fresnel_table(angle_deg_of_cos(min(vh, 1.0)), p.fresnel_first, p.fresnel_count);
-    return f * (d * g / (4.0 * nv)) * irradiance;
-}
-
-// Reflection about H is reflection about N followed by a turn of 2·∠(N, H), so a light more than
-// 2·θ_max from the mirror direction R has ∠(N, H) > θ_max, tan²θ_max = 50 m²: `bright_light`'s
-// lobe test would skip it, and one dot product with R does it first.
-float bright_cull_cos(LacquerParams p) {
-    float cull_angle = 2.0 * atan(7.0710678 * p.beckmann_m);
-    return cull_angle < PI ? cos(cull_angle) : -2.0;
+    vec3 f = lacquer_fresnel(p, angle_deg_of_cos(min(vh, 1.0)));
+    return f * (d * g / (4.0 * nv)) * irradiance.rgb;
 }
 
 // The bright split's lights (`env_light_*`; twin: `bright_specular`).
 vec3 bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
     vec3 r = 2.0 * nv * n - v;
-    float cull_cos = bright_cull_cos(p);
     vec3 sum = vec3(0.0);
     for (int i = 0; i < frame.environment.z; ++i) {
-        sum += bright_light(p, n, v, nv, r, cull_cos, frame.env_light_direction[i].xyz,
-            frame.env_light_irradiance[i].rgb);
+        sum += bright_light(p, n, v, nv, r, frame.env_light_direction[i],
+            frame.env_light_irradiance[i]);
     }
     return sum;
 }
@@ -205,11 +229,41 @@ vec3 bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
 // The rough split's lights (`env_rough_light_*`; twin: `bright_specular` of them).
 vec3 rough_bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
     vec3 r = 2.0 * nv * n - v;
-    float cull_cos = bright_cull_cos(p);
     vec3 sum = vec3(0.0);
     for (int i = 0; i < frame.env_rough.y; ++i) {
-        sum += bright_light(p, n, v, nv, r, cull_cos, frame.env_rough_light_direction[i].xyz,
-            frame.env_rough_light_irradiance[i].rgb);
+        sum += bright_light(p, n, v, nv, r, frame.env_rough_light_direction[i],
+            frame.env_rough_light_irradiance[i]);
+    }
+    return sum;
+}
+
+// The cell of the rough lights' direction bins holding d (twin: light_bins.rs `light_bin`).
+int light_bin(vec3 d) {
+    int face;
+    vec2 st;
+    vec3 axis, s_dir, t_dir;
+    select_face(d, face, st, axis, s_dir, t_dir);
+    ivec2 cell = clamp(ivec2(floor((st + 1.0) * (0.5 * float(ENV_LIGHT_BIN_CELLS)))), ivec2(0),
+        ivec2(ENV_LIGHT_BIN_CELLS - 1));
+    return (face * ENV_LIGHT_BIN_CELLS + cell.y) * ENV_LIGHT_BIN_CELLS + cell.x;
+}
+
+// `rough_bright_specular` for m up to frame.env_lattice_share.z, visiting only the lights listed
+// in the direction bin of the mirror direction (environment/light_bins.rs, which holds each
+// listed light's direction and irradiance): the others would add an exact 0, and the listed ones
+// are added in the same order, so the sum is the same number.
+vec3 binned_rough_bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
+    vec3 r = 2.0 * nv * n - v;
+    int headers = frame.env_rough.z;
+    int list = headers + 6 * ENV_LIGHT_BIN_CELLS * ENV_LIGHT_BIN_CELLS;
+    vec2 bin = texelFetch(fresnel_knots, headers + light_bin(r)).xy;
+    int first = int(bin.x);
+    int count = int(bin.y);
+    vec3 sum = vec3(0.0);
+    for (int k = first; k < first + count; ++k) {
+        vec4 light = texelFetch(fresnel_knots, list + 2 * k);
+        vec4 irradiance = texelFetch(fresnel_knots, list + 2 * k + 1);
+        sum += bright_light(p, n, v, nv, r, light, irradiance);
     }
     return sum;
 }
@@ -227,7 +281,7 @@ void add_lookup_pair(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh
     }
     float cos_h = dot(n, h);
     float g = cook_torrance_g(cos_h, nv, nl, vh);
-    vec3 f = fresnel_table(angle_deg_of_cos(min(vh, 1.0)), p.fresnel_first, p.fresnel_count);
+    vec3 f = lacquer_fresnel(p, angle_deg_of_cos(min(vh, 1.0)));
     vec3 weight = f * (scale * g * vh / (nv * cos_h));
     sum += weight * layered_radiance_pair(s, k0, t, base);
     weights += weight;
@@ -278,7 +332,7 @@ float lattice_taper(float x) {
 // The narrow-lobe quadrature (twin: `specular_lattice`, whose doc derives it): nodes on the plane
 // of incidence at Beckmann slopes i·step, each read at the blur β that supplies the lobe's width
 // across the plane, weighted by the Gaussian of the rest of the in-plane spread.
-vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv) {
+vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
     vec3 tangent, bitangent;
     incidence_frame(n, v, nv, tangent, bitangent);
     float spacing = frame.env_lattice.x;
@@ -304,7 +358,7 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv) {
         vec3 h = normalize(tangent * slope + n);
         float vh = dot(v, h);
         if (gauss > 0.0 && vh > 0.0) {
-            add_lookup_pair(p, n, v, nv, h, vh, gauss, k0, t, 0, sum, weights);
+            add_lookup_pair(p, n, v, nv, h, vh, gauss, k0, t, base, sum, weights);
         }
     }
     return normalized_lookups(p, nv, sum, weights);
@@ -402,13 +456,18 @@ vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv, int samples, int ba
 vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv, int samples) {
     bool camera = samples >= ENV_SAMPLES;
     vec3 shares = quadrature_shares(p.beckmann_m, camera);
-    // Where the camera looks the grid and filtered importance sampling read the rough split; at
-    // a path's hit filtered importance sampling reads the lattice's.
+    // Where the camera looks the grid and filtered importance sampling read the rough split, and
+    // the lattice from frame.env_lattice_share.y up (below it the rough split's blocks are too
+    // wide for the lobe); at a path's hit every quadrature reads the first split.
+    bool lattice_rough = camera && p.beckmann_m >= frame.env_lattice_share.y;
     int rough_base = camera ? frame.env_rough.x : 0;
     float rough_share = camera ? shares.y + shares.z : 0.0;
+    if (lattice_rough) {
+        rough_share += shares.x;
+    }
     vec3 lookups = vec3(0.0);
     if (shares.x > 0.0) {
-        lookups += shares.x * specular_lattice(p, n, v, nv);
+        lookups += shares.x * specular_lattice(p, n, v, nv, lattice_rough ? rough_base : 0);
     }
     if (shares.y > 0.0) {
         lookups += shares.y * specular_grid(p, n, v, nv, rough_base);
@@ -421,7 +480,10 @@ vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv, int sa
         bright += (1.0 - rough_share) * bright_specular(p, n, v, nv);
     }
     if (rough_share > 0.0) {
-        bright += rough_share * rough_bright_specular(p, n, v, nv);
+        vec3 rough_lights = p.beckmann_m <= frame.env_lattice_share.z
+            ? binned_rough_bright_specular(p, n, v, nv)
+            : rough_bright_specular(p, n, v, nv);
+        bright += rough_share * rough_lights;
     }
     return lookups + bright;
 }

@@ -30,6 +30,7 @@ struct LacquerParams {
     vec3 albedo;       // k_d
     int fresnel_first; // index of the table's first knot in fresnel_knots (tables are concatenated)
     int fresnel_count; // number of knots
+    float fresnel_step; // the angle between the table's first two knots (fresnel_table's guess)
     int albedo_first;  // index of the first A(nv) knot in fresnel_knots (the `brdf` model)
 };
 
@@ -46,6 +47,9 @@ LacquerParams lacquer_params(ObjectMaterial m) {
     p.fresnel_first = int(m.fresnel_first);
     p.albedo_first = int(m.albedo_first);
     p.fresnel_count = int(m.fresnel_count);
+    // Read once here, not by every lookup of the table (the `brdf` model makes ~100 a pixel).
+    p.fresnel_step = texelFetch(fresnel_knots, p.fresnel_first + 1).x
+        - texelFetch(fresnel_knots, p.fresnel_first).x;
     return p;
 }
 
@@ -98,9 +102,9 @@ float view_factor(LacquerParams p, vec2 nv) {
     return f;
 }
 
-// F(θ): linear interpolation in the table of `count` knots from texelFetch(fresnel_knots, first); θ in
-// degrees, clamped to [0, 90].
-vec3 fresnel_table(float theta_deg, int first, int count) {
+// F(θ): linear interpolation in the table of `count` knots from texelFetch(fresnel_knots, first),
+// whose first two knots are `step` degrees apart; θ in degrees, clamped to [0, 90].
+vec3 fresnel_table(float theta_deg, int first, int count, float step) {
     float theta = clamp(theta_deg, 0.0, 90.0);
     // The interval is [lo, lo + 1] with lo the last knot ≤ θ among 0..count-2. Evenly spaced
     // tables (every built-in one: a knot per degree) are indexed directly; the guess is checked
@@ -108,7 +112,6 @@ vec3 fresnel_table(float theta_deg, int first, int count) {
     // to the binary search, so the result is the search's exactly. Why: the search is a divergent
     // loop of dependent buffer reads, run four times per fragment.
     int last = count - 2;
-    float step = texelFetch(fresnel_knots, first + 1).x - texelFetch(fresnel_knots, first + 0).x;
     int lo = clamp(int(theta / step), 0, last);
     bool found = FRESNEL_POW2_GRID
         || (texelFetch(fresnel_knots, first + lo).x <= theta
@@ -132,6 +135,11 @@ vec3 fresnel_table(float theta_deg, int first, int count) {
     float span = k1.x - k0.x;
     float t = span > 0.0 ? clamp((theta - k0.x) / span, 0.0, 1.0) : 0.0;
     return mix(k0.yzw, k1.yzw, t);
+}
+
+// F(θ) of the material's table (θ in degrees).
+vec3 lacquer_fresnel(LacquerParams p, float theta_deg) {
+    return fresnel_table(theta_deg, p.fresnel_first, p.fresnel_count, p.fresnel_step);
 }
 
 // Angle in degrees of a cosine in [0, 1], for the Fresnel lookup (acos_unit: see math.glsl;
@@ -185,7 +193,7 @@ vec3 lacquer_brdf_view(LacquerParams p, vec3 n, vec3 v, vec3 l, vec2 nv2, vec3 f
     float vh = dot(v, h);
     float d = beckmann_d(n, h, nh, p.beckmann_m);
     float g = cook_torrance_g(nh, nv, nl, vh);
-    vec3 f = fresnel_table(angle_deg_of_cos(vh), p.fresnel_first, p.fresnel_count);
+    vec3 f = lacquer_fresnel(p, angle_deg_of_cos(vh));
     vec3 f_spec = f * (d * g / (4.0 * nv * nl));
     return f_diff + f_spec;
 }

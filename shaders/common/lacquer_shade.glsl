@@ -30,7 +30,7 @@ vec3 environment_light(LacquerParams p, vec3 view_blur, vec3 n, vec3 v, vec2 nv2
     {
         vec3 r = 2.0 * nv * n - v;
         float beta = view_blur.y + (view_blur.x - view_blur.y) * pow(min(nv, 1.0), view_blur.z);
-        specular = fresnel_table(angle_deg_of_cos(nv), p.fresnel_first, p.fresnel_count)
+        specular = lacquer_fresnel(p, angle_deg_of_cos(nv))
             * prefiltered_radiance(r, beta);
     }
 #endif

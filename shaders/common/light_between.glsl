@@ -28,7 +28,7 @@ void tangent_frame(vec3 n, out vec3 t, out vec3 b) {
 // uniform sky (Fresnel at nv against the diffuse albedo), kept in [0.1, 0.9] so neither lobe is
 // starved.
 float specular_lobe_probability(LacquerParams p, float nv, vec3 f_diff) {
-    vec3 f = fresnel_table(angle_deg_of_cos(nv), p.fresnel_first, p.fresnel_count);
+    vec3 f = lacquer_fresnel(p, angle_deg_of_cos(nv));
     float specular = f.r + f.g + f.b;
     float diffuse = (f_diff.r + f_diff.g + f_diff.b) * PI;
     return clamp(specular / max(specular + diffuse, 1e-30), 0.1, 0.9);

@@ -65,15 +65,15 @@ pub fn brdf_environment_specular_gpu(
     let mut frame = Frame::zeroed();
     frame.environment = [1, env.layers.len() as i32, 0, 0];
     frame.set_environment_layers(&env.betas, &env.layer_faces());
-    frame.set_bright_lights(sources.lights);
-    frame.set_rough_split(sources.rough_lights, sources.rough_first_texel);
     frame.set_brdf_quadrature();
+    frame.set_brdf_lights(&sources.lights);
     let mut knots = fresnel_knots(fresnel);
     let material = ObjectMaterial {
         albedo_first: knots.len() as f32,
         ..ObjectMaterial::new(brdf, fresnel)
     };
     knots.extend(albedo_knots(brdf, fresnel));
+    frame.append_light_bins(&mut knots, [brdf.beckmann_m]);
     let params = BrdfEvalParams {
         material,
         row_count: [rows as u32, 0, 0, 0],

@@ -17,9 +17,9 @@ use super::bright::BrightLight;
 use super::cube::{direction_to_face, face_direction};
 use super::image::{CubeImage, PrefilteredEnvironment};
 use super::params::layer_blend;
-use crate::gpu::shaders::interface::ALBEDO_KNOTS;
+use crate::gpu::shaders::interface::{ALBEDO_KNOTS, BRIGHT_LOBE_CULL};
 use crate::model::brdf::cook_torrance_g;
-use crate::model::{lacquer_specular, BrdfParams, FresnelTable};
+use crate::model::{BrdfParams, FresnelTable};
 
 /// Lobe samples per point the camera sees (the shaders' `ENV_SAMPLES`), for the materials
 /// filtered importance sampling serves (m above `LATTICE_M_LO`): the cost and accuracy are
@@ -216,6 +216,12 @@ pub const LATTICE_TAPER: f64 = 0.2;
 /// rough one (0.2) gets the grid, m = 0.5 filtered importance sampling.
 pub const LATTICE_M_LO: f64 = 0.06;
 pub const LATTICE_M_HI: f64 = 0.07;
+/// Where the camera looks the lattice reads the rough split (its blocks all lights, so no light
+/// box is left in the layers for the lattice's tails to meet) when the split's blocks are at most
+/// `ROUGH_LATTICE_BLOCK`·m across; below that a block as a point light is too wide for the
+/// lobe and the lattice keeps the first split. Measured in BENCHMARKS.md ("The lattice on the
+/// rough split").
+pub const ROUGH_LATTICE_BLOCK: f64 = 1.5;
 pub const FIS_M_LO: f64 = 0.22;
 pub const FIS_M_HI: f64 = 0.3;
 /// The deconvolved slope grid (`specular_grid`): t, the share of the lobe's width across the
@@ -226,6 +232,13 @@ pub const GRID_BLUR_SHARE: f64 = 0.45;
 pub const GRID_SPACING: f64 = 1.7;
 pub const GRID_REACH: f64 = 3.6;
 pub const GRID_MAX_HALF: u32 = 32;
+
+/// The least m whose lattice reads the rough split, for blocks `block_angle` radians across
+/// ([`ROUGH_LATTICE_BLOCK`]), as `Frame::env_lattice_share.y` holds it: the shader compares the
+/// material's m in f32 with it, and so does [`brdf_specular`].
+pub fn rough_lattice_m(block_angle: f64) -> f32 {
+    (block_angle / ROUGH_LATTICE_BLOCK) as f32
+}
 
 /// Each quadrature's share of the `brdf` model's lookups for roughness m (lattice, grid,
 /// filtered importance sampling; they sum to 1). `camera`: the point the camera sees; at a
@@ -397,8 +410,9 @@ fn incidence(n: DVec3, v: DVec3) -> Option<Incidence> {
     })
 }
 
-/// The map's bright lights (bright.rs) through the specular lobe, Σ f_spec·E·(N·l): the twin of
-/// brdf_environment.glsl's `bright_specular`.
+/// The map's bright lights (bright.rs) through the specular lobe, Σ f_spec·E·(N·l) with each
+/// light's spread folded into the lobe ([`bright_light`]), each light beyond [`light_cull_cos`]
+/// of the mirror direction skipped: the twin of brdf_environment.glsl's `bright_specular`.
 pub fn bright_specular(
     lights: &[BrightLight],
     brdf: &BrdfParams,
@@ -406,27 +420,117 @@ pub fn bright_specular(
     n: DVec3,
     v: DVec3,
 ) -> [f64; 3] {
+    let nv = n.dot(v);
     let mut sum = [0.0; 3];
+    if nv <= 0.0 {
+        return sum;
+    }
+    let r = 2.0 * nv * n - v;
     for light in lights {
-        let f = lacquer_specular(brdf, fresnel, n, v, light.direction);
-        let nl = n.dot(light.direction).max(0.0);
+        let cull = light_cull_cos(brdf.beckmann_m, light.spread);
+        if r.dot(light.direction) < cull {
+            continue;
+        }
+        let term = bright_light(brdf, fresnel, (n, v, nv), light);
         for c in 0..3 {
-            sum[c] += f[c] * nl * light.irradiance[c];
+            sum[c] += term[c];
         }
     }
     sum
 }
 
+/// One bright light through the specular lobe, f_spec·E·(N·l) = F·D'·G·E/(4·nv), where D' is
+/// Beckmann's D convolved with the light's spread σ² (`BrightLight::spread`): in slope space D is
+/// a Gaussian of variance m²/2 per axis, and a light spread by σ² per axis about l spreads the
+/// half vector by σ²/4 along the plane of V and l (H bisects V and l) and by σ²/(4·(V·H)²)
+/// across it (|V + l| = 2·V·H), so D' = exp(−x²/m_x² − y²/m_y²)/(π·m_x·m_y·(N·H)⁴) with
+/// m_x² = m² + σ²/2, m_y² = m² + σ²/(2·(V·H)²) and (x, y) H's slope along and across that
+/// plane. With σ² = 0 it is D (SPEC §2); for a block as wide as the lobe it keeps the second
+/// moment a point light loses (BENCHMARKS.md, "Lights with a spread").
+pub fn bright_light(
+    brdf: &BrdfParams,
+    fresnel: &FresnelTable,
+    (n, v, nv): (DVec3, DVec3, f64),
+    light: &BrightLight,
+) -> [f64; 3] {
+    let l = light.direction;
+    let nl = n.dot(l);
+    let half = v + l;
+    let half_len = half.length();
+    if nl <= 0.0 || half_len <= 0.0 {
+        return [0.0; 3];
+    }
+    let h = half / half_len;
+    let (nh, vh) = (n.dot(h), v.dot(h));
+    if nh <= 0.0 || vh <= 0.0 {
+        return [0.0; 3];
+    }
+    let d = spread_beckmann_d(
+        brdf.beckmann_m,
+        light.spread,
+        (n, v, l),
+        (nh, vh),
+        n.cross(h),
+    );
+    let g = cook_torrance_g(nh, nv, nl, vh);
+    let f = fresnel.eval(vh.min(1.0).acos().to_degrees());
+    std::array::from_fn(|c| f[c] * (d * g / (4.0 * nv)) * light.irradiance[c])
+}
+
+/// D' of [`bright_light`]: `c` = N × H. The slope across the plane of V and l (unit normal e) is
+/// −N·e/√(1 − (N·e)²), as H lies in that plane; the rest of tan²θ_H is along it.
+fn spread_beckmann_d(
+    m: f64,
+    spread: f64,
+    (n, v, l): (DVec3, DVec3, DVec3),
+    (nh, vh): (f64, f64),
+    c: DVec3,
+) -> f64 {
+    let nh2 = nh * nh;
+    let tan2 = c.length_squared() / nh2;
+    let across = v.cross(l);
+    let across2 = across.length_squared();
+    let ne2 = match across2 > 0.0 {
+        true => n.dot(across).powi(2) / across2,
+        false => 0.0,
+    };
+    // V ∥ l (no plane: H = V) leaves all of tan²θ_H along.
+    let y2 = match ne2 < 1.0 {
+        true => (ne2 / (1.0 - ne2)).min(tan2),
+        false => 0.0,
+    };
+    let x2 = tan2 - y2;
+    let m2 = m * m;
+    let mx2 = m2 + 0.5 * spread;
+    let my2 = m2 + 0.5 * spread / (vh * vh);
+    (-x2 / mx2 - y2 / my2).exp() / (PI * (mx2 * my2).sqrt() * nh2 * nh2)
+}
+
+/// cos of the largest angle between the mirror direction R and a light of spread σ² that
+/// [`bright_specular`] keeps for roughness m: 2·θ_max with tan²θ_max = `BRIGHT_LOBE_CULL`·(m² +
+/// σ²/2), the slopes where the widened D' of [`bright_light`] is above e^-9 of its peak along the
+/// plane (reflection about H is reflection about N turned by 2·∠(N, H); across the plane D' is
+/// wider in slopes by 1/(V·H), and the reflection narrower by V·H, the same reach in
+/// directions). cos 2θ = (1 − tan²θ)/(1 + tan²θ), without trigonometry, as the shader's
+/// `light_cull_cos`.
+pub fn light_cull_cos(m: f64, spread: f64) -> f64 {
+    let t2 = f64::from(BRIGHT_LOBE_CULL) * (m * m + 0.5 * spread);
+    (1.0 - t2) / (1.0 + t2)
+}
+
 /// What the `brdf` model reads on the CPU, as a draw does on the device
 /// (`GpuEnvironment::brdf_sources`): the bright split's residual layers and lights
-/// (`bright::split_bright`), and the rough split's (`bright::split_bright_rough`), whose layers
-/// the grid and filtered importance sampling read where the camera looks.
+/// (`bright::split_bright`), and the rough split's (`bright::split_bright_rough`) with the size of
+/// its blocks, whose layers the grid and filtered importance sampling read where the camera
+/// looks, and the lattice from [`rough_lattice_m`] up.
 #[derive(Clone, Copy)]
 pub struct BrdfSources<'a> {
     pub residual: &'a PrefilteredEnvironment,
     pub lights: &'a [BrightLight],
     pub rough_residual: &'a PrefilteredEnvironment,
     pub rough_lights: &'a [BrightLight],
+    /// The rough split's blocks' size (radians, `BrightSplit::block_angle`).
+    pub rough_block_angle: f64,
 }
 
 impl<'a> BrdfSources<'a> {
@@ -437,6 +541,7 @@ impl<'a> BrdfSources<'a> {
             lights: &[],
             rough_residual: env,
             rough_lights: &[],
+            rough_block_angle: 0.0,
         }
     }
 }
@@ -446,8 +551,9 @@ impl<'a> BrdfSources<'a> {
 /// [`quadrature_shares`] says for the material's m, plus the bright lights. The grid serves the
 /// points the camera sees (`samples` ≥ `BRDF_SAMPLES`); with fewer samples (a path's hit)
 /// filtered importance sampling takes its share. Where the camera looks the grid and filtered
-/// importance sampling read the rough split and their share of the lights is the rough split's;
-/// the lattice, and everything at a path's hit, reads the bright split.
+/// importance sampling read the rough split, and the lattice does from [`rough_lattice_m`] up;
+/// each split's lights take the share of the lookups that read its residual. Everything at a
+/// path's hit reads the bright split.
 pub fn brdf_specular(
     sources: BrdfSources<'_>,
     samples: u32,
@@ -456,10 +562,16 @@ pub fn brdf_specular(
     v: DVec3,
 ) -> [f64; 3] {
     let camera = samples >= BRDF_SAMPLES;
-    let shares = quadrature_shares(material.0.beckmann_m, camera);
+    let m = material.0.beckmann_m;
+    let shares = quadrature_shares(m, camera);
+    let lattice_rough = camera && m as f32 >= rough_lattice_m(sources.rough_block_angle);
     let (rough, rough_share) = match camera {
         true => (sources.rough_residual, shares[1] + shares[2]),
         false => (sources.residual, 0.0),
+    };
+    let (lattice_residual, rough_share) = match lattice_rough {
+        true => (sources.rough_residual, rough_share + shares[0]),
+        false => (sources.residual, rough_share),
     };
     let mut lookups = [0.0; 3];
     let mut add = |share: f64, quadrature: &dyn Fn() -> [f64; 3]| {
@@ -471,7 +583,7 @@ pub fn brdf_specular(
         }
     };
     add(shares[0], &|| {
-        specular_lattice(sources.residual, material, n, v)
+        specular_lattice(lattice_residual, material, n, v)
     });
     add(shares[1], &|| specular_grid(rough, material, n, v));
     add(shares[2], &|| {
@@ -587,5 +699,138 @@ mod tests {
         // rad). A tap from the wrong texel at an edge costs up to a texel's step of the field,
         // ≈ √6·0.05 ≈ 0.12, so 0.03 would catch it.
         assert!(worst < 0.03, "{worst}");
+    }
+
+    fn smooth() -> (BrdfParams, FresnelTable) {
+        let p = BrdfParams {
+            beckmann_m: 0.05,
+            diffuse_a: 0.01,
+            diffuse_b: 0.96,
+            lacquer_g: 1.0159,
+            albedo: [0.5, 0.06, 0.03],
+        };
+        (p, FresnelTable::dielectric(1.5, 0.0045).unwrap())
+    }
+
+    /// With no spread a bright light is SPEC §2's f_spec·E·(N·l) (`lacquer_specular`): D' is
+    /// Beckmann's D written in slopes. 1e-12: two f64 roundings of the same formula.
+    #[test]
+    fn a_light_without_spread_is_the_brdf() {
+        let (p, fresnel) = smooth();
+        let n = DVec3::new(0.1, 1.0, -0.2).normalize();
+        let v = DVec3::new(0.6, 0.7, 0.2).normalize();
+        let nv = n.dot(v);
+        for k in 0..50 {
+            let t = f64::from(k) * 0.37;
+            let l = (2.0 * nv * n - v
+                + 0.08 * DVec3::new(t.sin(), (1.3 * t).cos(), (0.7 * t).sin()))
+            .normalize();
+            let light = BrightLight {
+                direction: l,
+                irradiance: [1.0, 2.0, 3.0],
+                spread: 0.0,
+            };
+            let got = bright_light(&p, &fresnel, (n, v, nv), &light);
+            let f = crate::model::lacquer_specular(&p, &fresnel, n, v, l);
+            for c in 0..3 {
+                let want = f[c] * n.dot(l) * light.irradiance[c];
+                assert!(
+                    (got[c] - want).abs() <= 1e-12 * want.abs().max(1e-30),
+                    "{k}: {got:?}"
+                );
+            }
+        }
+    }
+
+    /// What the spread is for: a square block of light as wide as the lobe (a rough split's
+    /// block on a 1k map, 2.8°, under m = 0.05) through the lobe, summed pixel by pixel (64²
+    /// points), against one light at its centroid with and without its spread. Measured (relative
+    /// to the block; view elevation, block's offset from the mirror direction): the point light
+    /// 4.7 % (60°, 0°), 4.2 % (60°, 2°), 10 % (30°, 1.5°), 2.1 % (80°, 4°) off, the spread light
+    /// 0.03, 0.01, 0.37, 0.01 %; at (10°, 3°), where the lobe across the plane is 6× narrower
+    /// than the block, 91 and 13 %. Bounds: within 1 % from 30° up, and at most a fifth of the
+    /// point light's error everywhere.
+    #[test]
+    fn a_spread_light_is_the_block_it_stands_for() {
+        let (p, fresnel) = smooth();
+        let n = DVec3::Y;
+        let width = 2.8f64.to_radians();
+        let count = 64;
+        for (elevation, offset) in [
+            (60.0f64, 0.0f64),
+            (60.0, 2.0),
+            (30.0, 1.5),
+            (10.0, 3.0),
+            (80.0, 4.0),
+        ] {
+            let (s, c) = elevation.to_radians().sin_cos();
+            let v = DVec3::new(-c, s, 0.0);
+            let nv = s;
+            // The block: centred `offset`° from the mirror direction along the plane.
+            let r = 2.0 * nv * n - v;
+            let tilt = offset.to_radians();
+            let centre = (r * tilt.cos() + DVec3::new(r.y, -r.x, 0.0) * tilt.sin()).normalize();
+            let (a, b) = (DVec3::Z, centre.cross(DVec3::Z).normalize());
+            let mut sum = [0.0; 3];
+            let (mut centroid, mut second) = (DVec3::ZERO, 0.0);
+            let share = 1.0 / f64::from(count * count);
+            for i in 0..count {
+                for j in 0..count {
+                    let x = (f64::from(i) + 0.5) / f64::from(count) - 0.5;
+                    let y = (f64::from(j) + 0.5) / f64::from(count) - 0.5;
+                    let d = (centre + width * (x * a + y * b)).normalize();
+                    let point = BrightLight {
+                        direction: d,
+                        irradiance: [share; 3],
+                        spread: 0.0,
+                    };
+                    let term = bright_light(&p, &fresnel, (n, v, nv), &point);
+                    for ch in 0..3 {
+                        sum[ch] += term[ch];
+                    }
+                    centroid += share * d;
+                    second += share;
+                }
+            }
+            // Σw·|d − ĉ|² = 2·(W − |Σw·d|): per axis, the half (as bright.rs has it).
+            let spread = 1.0 - centroid.length() / second;
+            let light = |spread| BrightLight {
+                direction: centroid.normalize(),
+                irradiance: [1.0; 3],
+                spread,
+            };
+            let point = bright_light(&p, &fresnel, (n, v, nv), &light(0.0))[1];
+            let spread = bright_light(&p, &fresnel, (n, v, nv), &light(spread))[1];
+            let point_error = (point - sum[1]).abs() / sum[1];
+            let spread_error = (spread - sum[1]).abs() / sum[1];
+            println!(
+                "{elevation}°, {offset}° off: point {point_error:.4}, spread {spread_error:.4}"
+            );
+            assert!(
+                spread_error <= 0.2 * point_error,
+                "{elevation}: {spread_error} {point_error}"
+            );
+            assert!(
+                elevation < 30.0 || spread_error <= 0.01,
+                "{elevation}: {spread_error}"
+            );
+        }
+    }
+
+    /// The cull angle is twice the half vector's limit at the widened m: against the same angle
+    /// with trigonometry.
+    #[test]
+    fn the_cull_is_twice_the_half_vector_limit() {
+        for m in [0.02, 0.06, 0.3, 2.0] {
+            for spread in [0.0, 1e-4, 0.01, 1.0] {
+                let t = (f64::from(BRIGHT_LOBE_CULL) * (m * m + 0.5 * spread)).sqrt();
+                let want = (2.0 * t.atan()).cos();
+                let got = light_cull_cos(m, spread);
+                assert!(
+                    (got - want).abs() < 1e-12,
+                    "m {m}, spread {spread}: {got} {want}"
+                );
+            }
+        }
     }
 }

@@ -8,10 +8,13 @@
 //! BENCHMARKS.md ("The `brdf` environment model").
 //!
 //! Two splits of one map: [`split_bright`] (at most `MAX_ENV_LIGHTS` blocks, the brightest) for
-//! the narrow lobes' lattice and the paths' hits, and [`split_bright_rough`] (every bright block,
-//! in blocks grown until there are at most `ROUGH_MAX_ENV_LIGHTS`) for the wider lobes where the
-//! camera looks: a studio's light boxes are hundreds of blocks, and those left in the layers were
-//! what a wide lobe's tails met from dark pixels (studio, m = 0.2: mean error 4.3 → 1.1 %).
+//! the paths' hits and the narrowest lobes, and [`split_bright_rough`] (every bright block, in
+//! blocks grown until there are at most `ROUGH_MAX_ENV_LIGHTS`) for every lobe the camera sees
+//! whose width its blocks allow: a studio's light boxes are hundreds of blocks, and those left in
+//! the layers were what a lobe's tails met from dark pixels (studio, m = 0.2: mean error 4.3 →
+//! 1.1 %; m = 0.05, sphere relative RMSE 3.1 → 0.55 %). Each light keeps its block's spread, which
+//! the lobe is widened by (`brdf_quadrature::bright_light`), so a block as wide as the lobe is
+//! still a good light.
 
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -30,11 +33,16 @@ pub const BRIGHT_THRESHOLD: f64 = 16.0;
 /// takes as few lights at 8k as at 1k.
 const BRIGHT_GRID_WIDTH: u32 = 512;
 
-/// A bright block as a directional light: towards it, and its irradiance at normal incidence.
+/// A bright block as a directional light: towards it, its irradiance at normal incidence, and
+/// how far its radiance spreads about that direction: the variance per axis (rad²) of its pixels'
+/// directions (their excess luminance the weights, each pixel's own extent included), by which
+/// `brdf_quadrature::bright_specular` widens the lobe it meets (a block as wide as the lobe is
+/// then still a good light).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BrightLight {
     pub direction: DVec3,
     pub irradiance: [f64; 3],
+    pub spread: f64,
 }
 
 /// A map split into its residual and at most `MAX_ENV_LIGHTS` bright lights (map frame, before the
@@ -43,6 +51,9 @@ pub struct BrightLight {
 pub struct BrightSplit {
     pub residual: Equirect,
     pub lights: Vec<BrightLight>,
+    /// The size of its blocks (radians): the larger of a block's height and its width at the
+    /// equator, which a block as a point light must be small against.
+    pub block_angle: f64,
 }
 
 impl BrightSplit {
@@ -54,6 +65,7 @@ impl BrightSplit {
                 // world_to_environment turns by −ρ; by +ρ is the way back.
                 direction: world_to_environment(l.direction, -light.rotation_deg),
                 irradiance: l.irradiance.map(|e| e * light.intensity),
+                spread: l.spread,
             })
             .collect()
     }
@@ -71,6 +83,14 @@ fn pixel_direction(x: u32, y: u32, width: u32, height: u32) -> DVec3 {
     equirect_to_direction(u, v)
 }
 
+/// The variance per axis (rad²) of directions spread evenly over a pixel of row y: the mean of
+/// its height's and its width's (at that row's latitude) squares over 12.
+fn pixel_variance(y: u32, width: u32, height: u32) -> f64 {
+    let tall = PI / f64::from(height);
+    let wide = 2.0 * PI / f64::from(width) * (PI * (f64::from(y) + 0.5) / f64::from(height)).sin();
+    (tall * tall + wide * wide) / 24.0
+}
+
 /// One block's share of the bright part: which pixels, what they give.
 struct Block {
     pixels: Vec<(usize, [f32; 3])>,
@@ -78,6 +98,8 @@ struct Block {
     /// Σ luminance-of-excess × direction: the light's direction, normalised.
     centroid: DVec3,
     weight: f64,
+    /// Σ luminance-of-excess × each pixel's own variance per axis.
+    pixel_spread: f64,
 }
 
 /// Splits `map` (see the module doc). Pixels above `BRIGHT_THRESHOLD` × the mean luminance are
@@ -89,11 +111,12 @@ pub fn split_bright(map: &Equirect) -> BrightSplit {
     split_in_blocks(map, bright_threshold(map), block, MAX_ENV_LIGHTS)
 }
 
-/// The split the rough materials' quadratures read (the grid's and filtered importance
-/// sampling's, where the camera looks): every bright block a light, so the residual holds nothing
-/// above the threshold. The blocks start as [`split_bright`]'s and double in size until there are
-/// at most `ROUGH_MAX_ENV_LIGHTS` of them; a block is then at most a few degrees across, small
-/// against those lobes (BENCHMARKS.md, "Where the remaining error is").
+/// The split the quadratures read where the camera looks (the grid's and filtered importance
+/// sampling's, and the lattice's where its blocks are at most `ROUGH_LATTICE_BLOCK`·m across):
+/// every bright block a light, so the residual holds nothing above the threshold. The blocks
+/// start as [`split_bright`]'s and double in size until there are at most `ROUGH_MAX_ENV_LIGHTS`
+/// of them; a block is then a few degrees across, and its spread widens the lobe it meets
+/// (BENCHMARKS.md, "Where the remaining error is").
 pub fn split_bright_rough(map: &Equirect) -> BrightSplit {
     let threshold = bright_threshold(map);
     let bright: Vec<(u32, u32)> = (0..map.height)
@@ -164,6 +187,7 @@ fn split_in_blocks(map: &Equirect, threshold: f64, block: u32, max_lights: usize
                         irradiance: [0.0; 3],
                         centroid: DVec3::ZERO,
                         weight: 0.0,
+                        pixel_spread: 0.0,
                     },
                 ));
                 blocks.len() - 1
@@ -173,6 +197,7 @@ fn split_in_blocks(map: &Equirect, threshold: f64, block: u32, max_lights: usize
             b.pixels.push((index, kept));
             b.centroid += weight * pixel_direction(x, y, w, h);
             b.weight += weight;
+            b.pixel_spread += weight * pixel_variance(y, w, h);
             for (sum, e) in b.irradiance.iter_mut().zip(excess) {
                 *sum += e;
             }
@@ -188,13 +213,25 @@ fn split_in_blocks(map: &Equirect, threshold: f64, block: u32, max_lights: usize
             for (index, kept) in b.pixels {
                 residual.pixels[index] = kept;
             }
+            // Σw·|d − ĉ|² = 2·(W − |Σw·d|) over unit d about ĉ = Σw·d/|Σw·d|: two axes' worth.
+            let spread = match b.weight > 0.0 {
+                true => (1.0 - b.centroid.length() / b.weight).max(0.0) + b.pixel_spread / b.weight,
+                false => 0.0,
+            };
             BrightLight {
                 direction: b.centroid.normalize_or_zero(),
                 irradiance: b.irradiance,
+                spread,
             }
         })
         .collect();
-    BrightSplit { residual, lights }
+    let block_angle =
+        (PI * f64::from(block) / f64::from(h)).max(2.0 * PI * f64::from(block) / f64::from(w));
+    BrightSplit {
+        residual,
+        lights,
+        block_angle,
+    }
 }
 
 #[cfg(test)]

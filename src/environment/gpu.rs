@@ -100,16 +100,18 @@ pub struct BrightEnvironment {
     lights: Vec<BrightLight>,
     rough_residual: GpuEnvironment,
     rough_lights: Vec<BrightLight>,
+    /// The rough split's blocks' size (radians, `BrightSplit::block_angle`).
+    rough_block_angle: f64,
     /// The residual's layer texels, then the rough residual's: [`BrightEnvironment::texels`].
     texels: std::sync::OnceLock<Buffer>,
 }
 
 impl BrightEnvironment {
-    /// The two splits of one map. Both residuals must have the same layers (β and face sizes):
-    /// the lookups read them through one layer table.
+    /// The two splits of one map (the rough one with its blocks' size). Both residuals must have
+    /// the same layers (β and face sizes): the lookups read them through one layer table.
     pub fn new(
         (residual, lights): (GpuEnvironment, Vec<BrightLight>),
-        (rough_residual, rough_lights): (GpuEnvironment, Vec<BrightLight>),
+        (rough_residual, rough_lights, rough_block_angle): (GpuEnvironment, Vec<BrightLight>, f64),
     ) -> Result<Self> {
         same_layers(&residual, &rough_residual, "the rough split's residual")?;
         Ok(Self {
@@ -117,6 +119,7 @@ impl BrightEnvironment {
             lights,
             rough_residual,
             rough_lights,
+            rough_block_angle,
             texels: std::sync::OnceLock::new(),
         })
     }
@@ -142,12 +145,20 @@ fn same_layers(ours: &GpuEnvironment, theirs: &GpuEnvironment, what: &str) -> Re
 }
 
 /// What the `brdf` model's shaders read of a map: the layer texels (the residual's, then the
-/// rough residual's from `rough_first_texel`), and the two splits' lights.
+/// rough residual's from `lights.rough_first_texel`), and the two splits' lights.
 pub struct BrdfSources<'a> {
     pub texels: &'a Buffer,
-    pub rough_first_texel: u64,
+    pub lights: BrdfLights<'a>,
+}
+
+/// The two splits' lights, where the rough residual's texels start, and the rough split's blocks'
+/// size (radians; the lattice reads that split from `brdf_quadrature::rough_lattice_m` of it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BrdfLights<'a> {
     pub lights: &'a [BrightLight],
     pub rough_lights: &'a [BrightLight],
+    pub rough_first_texel: u64,
+    pub rough_block_angle: f64,
 }
 
 /// The index of each layer's first texel when the layers of `faces` are stored one after the
@@ -204,29 +215,32 @@ impl GpuEnvironment {
     /// residuals and lights, or without them this map itself for both and no lights (an
     /// environment uploaded by hand, as tests do).
     pub fn brdf_sources(&self, gpu: &GpuContext) -> Result<BrdfSources<'_>> {
-        let (lights, rough_lights, rough_first_texel) = self.brdf_lights();
         let texels = match self.bright.get() {
             Some(bright) => bright.texels(gpu)?,
             None => self.layer_texels(gpu)?,
         };
         Ok(BrdfSources {
             texels,
-            rough_first_texel,
-            lights,
-            rough_lights,
+            lights: self.brdf_lights(),
         })
     }
 
-    /// The lights of [`brdf_sources`](Self::brdf_sources) and where the rough residual's
-    /// texels start, without making the texel buffer: (lights, rough lights, rough first texel).
-    pub fn brdf_lights(&self) -> (&[BrightLight], &[BrightLight], u64) {
+    /// The lights of [`brdf_sources`](Self::brdf_sources), without making the texel buffer.
+    pub fn brdf_lights(&self) -> BrdfLights<'_> {
         match self.bright.get() {
-            Some(bright) => (
-                &bright.lights,
-                &bright.rough_lights,
-                layer_texel_offsets(bright.residual.layer_faces()).1,
-            ),
-            None => (&[], &[], 0),
+            Some(bright) => BrdfLights {
+                lights: &bright.lights,
+                rough_lights: &bright.rough_lights,
+                rough_first_texel: layer_texel_offsets(bright.residual.layer_faces()).1,
+                rough_block_angle: bright.rough_block_angle,
+            },
+            // The map itself for both splits: whichever the lattice reads, the same layers.
+            None => BrdfLights {
+                lights: &[],
+                rough_lights: &[],
+                rough_first_texel: 0,
+                rough_block_angle: 0.0,
+            },
         }
     }
 

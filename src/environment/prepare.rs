@@ -160,12 +160,13 @@ impl EnvironmentPreparer {
         warnings: &mut Vec<Warning>,
     ) -> Result<BrightEnvironment> {
         let params = model_params(gpu, image.width, EnvironmentModel::Brdf);
-        let mut part = |split: BrightSplit| -> Result<(GpuEnvironment, Vec<BrightLight>)> {
+        let mut part = |split: BrightSplit| -> Result<(GpuEnvironment, Vec<BrightLight>, f64)> {
             let lights = split.lights_in_world(light);
             let residual = self.prepare_image(gpu, &split.residual, (light, &params), warnings)?;
-            Ok((residual, lights))
+            Ok((residual, lights, split.block_angle))
         };
-        BrightEnvironment::new(part(split_bright(image))?, part(split_bright_rough(image))?)
+        let (residual, lights, _) = part(split_bright(image))?;
+        BrightEnvironment::new((residual, lights), part(split_bright_rough(image))?)
     }
 
     fn prepare_image(

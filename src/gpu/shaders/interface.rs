@@ -20,9 +20,20 @@ shader_interface! {
         /// The most bright parts of a map the `brdf` model takes out as directional lights
         /// (environment/bright.rs; `Frame::env_light_direction`).
         MAX_ENV_LIGHTS: usize = 16;
-        /// The most lights of the rough materials' bright split (environment/bright.rs
-        /// `split_bright_rough`; `Frame::env_rough_light_*`).
-        ROUGH_MAX_ENV_LIGHTS: usize = 256;
+        /// The most lights of the rough split (environment/bright.rs `split_bright_rough`;
+        /// `Frame::env_rough_light_*`). 128: a studio's light boxes at 1k in 71 blocks of 8 px
+        /// (2.8°), which their spread keeps accurate down to m = 0.033; at 256 (199 blocks of
+        /// 4 px) the default scene's lobes visit ~2.5× as many lights, +0.1 on its `brdf`/`paper`
+        /// ratio (BENCHMARKS.md).
+        ROUGH_MAX_ENV_LIGHTS: usize = 128;
+        /// A bright light whose half vector has tan²θ_H > BRIGHT_LOBE_CULL·m² is skipped: D there
+        /// is below e^-9 (1.2e-4) of its peak, and the lobe's share of slopes out there is e^-9
+        /// of the whole (brdf_environment.glsl `bright_light`, its twin brdf_quadrature.rs
+        /// `bright_specular`).
+        BRIGHT_LOBE_CULL: u32 = 9;
+        /// The rough split's lights are binned by direction on the cube, in cells of
+        /// ENV_LIGHT_BIN_CELLS² per face (environment/light_bins.rs).
+        ENV_LIGHT_BIN_CELLS: usize = 32;
         /// Knots of the specular directional albedo A(nv) the `brdf` model normalises by, at
         /// nv = (k/(ALBEDO_KNOTS − 1))² (environment/brdf_quadrature.rs `albedo_knots`).
         ALBEDO_KNOTS: usize = 65;
@@ -199,7 +210,8 @@ shader_interface! {
             /// y = bounces (0: none), z = the seed of the sample sequence.
             light_transport: ivec4,
             /// The `brdf` model's bright lights (environment/bright.rs), world frame: xyz towards
-            /// the light, and rgb its irradiance.
+            /// the light and w its spread σ² (rad², `BrightLight::spread`); rgb its irradiance.
+            /// The rough split's, `env_rough_light_*`, alike.
             env_light_direction: [vec4; MAX_ENV_LIGHTS],
             env_light_irradiance: [vec4; MAX_ENV_LIGHTS],
             /// The `brdf` model's plane-of-incidence lattice (environment/brdf_quadrature.rs
@@ -210,12 +222,18 @@ shader_interface! {
             env_lattice: vec4,
             env_lattice_band: vec4,
             env_grid: vec4,
-            /// x: the lattice's blur share t (`LATTICE_BLUR_SHARE`).
+            /// x: the lattice's blur share t (`LATTICE_BLUR_SHARE`); y: the least m whose lattice
+            /// reads the rough split where the camera looks (brdf_quadrature.rs
+            /// `rough_lattice_m`); z: the largest m the rough lights' direction bins serve (the
+            /// draw's largest up to `LATTICE_M_LO`).
             env_lattice_share: vec4,
             /// The rough materials' bright split (environment/bright.rs `split_bright_rough`),
-            /// which the grid and filtered importance sampling read where the camera looks: x the
+            /// which the grid and filtered importance sampling read where the camera looks (and
+            /// the lattice, from env_lattice_share.y up): x the
             /// index of its residual's first texel at `ENV_LAYER_TEXELS_BINDING` (its layers are
-            /// laid out as the residual's, after them), y its number of lights.
+            /// laid out as the residual's, after them), y its number of lights, z the first texel
+            /// of its lights' direction bins at `FRESNEL_KNOTS_BINDING` (environment/
+            /// light_bins.rs).
             env_rough: ivec4,
             env_rough_light_direction: [vec4; ROUGH_MAX_ENV_LIGHTS],
             env_rough_light_irradiance: [vec4; ROUGH_MAX_ENV_LIGHTS],

@@ -9,8 +9,10 @@
 
 use super::gpu_mesh::upload;
 use super::types::{DrawScene, RenderSettings};
+use crate::environment::brdf_quadrature::rough_lattice_m;
 use crate::environment::bright::BrightLight;
-use crate::environment::gpu::{layer_texel_offsets, GpuEnvironment};
+use crate::environment::gpu::{layer_texel_offsets, BrdfLights, GpuEnvironment};
+use crate::environment::light_bins::light_bin_texels;
 use crate::environment::params::ViewBlur;
 use crate::environment::EnvironmentModel;
 use crate::gpu::shaders::interface::{
@@ -85,20 +87,26 @@ impl ObjectMaterial {
 
 /// The environment as a draw sees it: whether there is one and the β of each layer.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct EnvironmentUniforms {
+pub(crate) struct EnvironmentUniforms<'a> {
     pub enabled: bool,
     pub layer_betas: Vec<f64>,
     /// Each layer's face size (the `brdf` model's texel lookups).
     pub layer_faces: Vec<u32>,
-    /// The `brdf` model's bright lights (world frame); empty in the `paper` model.
-    pub bright_lights: Vec<BrightLight>,
-    /// The `brdf` model's rough split: its lights, and its residual's first layer texel.
-    pub rough_lights: Vec<BrightLight>,
-    pub rough_first_texel: u64,
+    /// The `brdf` model's two splits' lights (world frame); none in the `paper` model.
+    pub brdf_lights: Option<BrdfLights<'a>>,
 }
 
 fn vec4(v: glam::DVec3, w: f32) -> [f32; 4] {
     [v.x as f32, v.y as f32, v.z as f32, w]
+}
+
+/// A bright light as the shaders read it (brdf_environment.glsl `bright_light`): (direction,
+/// spread σ²) and (irradiance, 0).
+fn pack_light(light: &BrightLight) -> ([f32; 4], [f32; 4]) {
+    (
+        vec4(light.direction, light.spread as f32),
+        vec4(DVec3::from(light.irradiance), 0.0),
+    )
 }
 
 impl Frame {
@@ -136,7 +144,9 @@ impl Frame {
             q::FIS_M_LO as f32,
             q::FIS_M_HI as f32,
         ];
-        self.env_lattice_share = [q::LATTICE_BLUR_SHARE as f32, 0.0, 0.0, 0.0];
+        // y, the rough split's lattice threshold, is the lights' (`set_brdf_lights`); z the
+        // light bins' (`append_light_bins`).
+        self.env_lattice_share[0] = q::LATTICE_BLUR_SHARE as f32;
         self.env_grid = [
             q::GRID_BLUR_SHARE as f32,
             q::GRID_SPACING as f32,
@@ -145,28 +155,55 @@ impl Frame {
         ];
     }
 
-    /// Packs the `brdf` model's bright lights (at most `MAX_ENV_LIGHTS`, which
-    /// `bright::split_bright` never exceeds); also used by the compute evaluator.
-    pub(crate) fn set_bright_lights(&mut self, lights: &[BrightLight]) {
-        let count = lights.len().min(MAX_ENV_LIGHTS);
+    /// Packs the `brdf` model's lights: the bright split's (at most `MAX_ENV_LIGHTS`, which
+    /// `bright::split_bright` never exceeds) and the rough split's (at most
+    /// `ROUGH_MAX_ENV_LIGHTS`, which `bright::split_bright_rough` never exceeds), where the rough
+    /// residual's texels start, and the least m whose lattice reads it; also used by the compute
+    /// evaluator. After [`set_brdf_quadrature`](Self::set_brdf_quadrature).
+    pub(crate) fn set_brdf_lights(&mut self, lights: &BrdfLights<'_>) {
+        let count = lights.lights.len().min(MAX_ENV_LIGHTS);
         self.environment[2] = count as i32;
-        for (i, light) in lights.iter().take(count).enumerate() {
-            self.env_light_direction[i] = vec4(light.direction, 0.0);
-            self.env_light_irradiance[i] = vec4(DVec3::from(light.irradiance), 0.0);
+        for (i, light) in lights.lights.iter().take(count).enumerate() {
+            (self.env_light_direction[i], self.env_light_irradiance[i]) = pack_light(light);
         }
+        let count = lights.rough_lights.len().min(ROUGH_MAX_ENV_LIGHTS);
+        // GpuEnvironment's texel buffers hold at most i32::MAX texels.
+        let first_texel = lights.rough_first_texel.min(i32::MAX as u64) as i32;
+        self.env_rough = [first_texel, count as i32, 0, 0];
+        for (i, light) in lights.rough_lights.iter().take(count).enumerate() {
+            (
+                self.env_rough_light_direction[i],
+                self.env_rough_light_irradiance[i],
+            ) = pack_light(light);
+        }
+        self.env_lattice_share[1] = rough_lattice_m(lights.rough_block_angle);
     }
 
-    /// Packs the `brdf` model's rough split (at most `ROUGH_MAX_ENV_LIGHTS` lights, which
-    /// `bright::split_bright_rough` never exceeds): its lights and where its residual's texels
-    /// start; also used by the compute evaluator.
-    pub(crate) fn set_rough_split(&mut self, lights: &[BrightLight], first_texel: u64) {
-        let count = lights.len().min(ROUGH_MAX_ENV_LIGHTS);
-        // GpuEnvironment's texel buffers hold at most i32::MAX texels.
-        self.env_rough = [first_texel.min(i32::MAX as u64) as i32, count as i32, 0, 0];
-        for (i, light) in lights.iter().take(count).enumerate() {
-            self.env_rough_light_direction[i] = vec4(light.direction, 0.0);
-            self.env_rough_light_irradiance[i] = vec4(DVec3::from(light.irradiance), 0.0);
-        }
+    /// Appends the direction bins of the packed rough lights (environment/light_bins.rs) to the
+    /// draw's knots for the draw's materials `ms`: for every m up to the largest of them that
+    /// the bins serve (at most `LATTICE_M_LO`, the lattice's: the narrower the lobes, the fewer
+    /// lights a cell lists), which goes to `env_lattice_share.z`; and points `env_rough.z` at
+    /// them. The bins are made from the f32 lights the frame holds.
+    pub(crate) fn append_light_bins(
+        &mut self,
+        knots: &mut Vec<[f32; 4]>,
+        ms: impl IntoIterator<Item = f64>,
+    ) {
+        let limit = crate::environment::brdf_quadrature::LATTICE_M_LO as f32;
+        let binned = ms
+            .into_iter()
+            .map(|m| m as f32)
+            .filter(|&m| m <= limit)
+            .fold(0.0, f32::max);
+        self.env_lattice_share[2] = binned;
+        let count = self.env_rough[1].max(0) as usize;
+        let lights: Vec<([f32; 4], [f32; 4])> = self.env_rough_light_direction[..count]
+            .iter()
+            .copied()
+            .zip(self.env_rough_light_irradiance[..count].iter().copied())
+            .collect();
+        self.env_rough[2] = knots.len() as i32;
+        knots.extend(light_bin_texels(&lights, f64::from(binned)));
     }
 
     /// Packs one draw's camera, lights and environment. `lights.len()` must be ≤ MAX_LIGHTS
@@ -177,7 +214,7 @@ impl Frame {
         height: u32,
         scene_radius: f64,
         lights: &[Light],
-        environment: &EnvironmentUniforms,
+        environment: &EnvironmentUniforms<'_>,
     ) -> Self {
         let (right, up, forward) = camera.basis();
         let mut frame = Frame {
@@ -204,9 +241,10 @@ impl Frame {
             ..Frame::zeroed()
         };
         frame.set_environment_layers(&environment.layer_betas, &environment.layer_faces);
-        frame.set_bright_lights(&environment.bright_lights);
-        frame.set_rough_split(&environment.rough_lights, environment.rough_first_texel);
         frame.set_brdf_quadrature();
+        if let Some(lights) = &environment.brdf_lights {
+            frame.set_brdf_lights(lights);
+        }
         for (i, light) in lights.iter().take(MAX_LIGHTS).enumerate() {
             let (vector, color) = match *light {
                 Light::Directional {
@@ -286,25 +324,10 @@ impl DrawBuffers {
         environment: &GpuEnvironment,
         (object_knots, object_albedo, scene_radius): (&[Knots], &[Knots], f64),
     ) -> Result<Frame> {
-        let (lights, rough_lights, rough_first_texel) = match scene.environment_model {
-            EnvironmentModel::Brdf => environment.brdf_lights(),
-            EnvironmentModel::Paper => (&[][..], &[][..], 0),
+        let brdf_lights = match scene.environment_model {
+            EnvironmentModel::Brdf => Some(environment.brdf_lights()),
+            EnvironmentModel::Paper => None,
         };
-        let mut frame = Frame::new(
-            scene.camera,
-            settings.width,
-            settings.height,
-            scene_radius,
-            scene.lights,
-            &EnvironmentUniforms {
-                enabled: scene.environment.is_some(),
-                layer_betas: environment.betas.clone(),
-                layer_faces: environment.layer_faces(),
-                bright_lights: lights.to_vec(),
-                rough_lights: rough_lights.to_vec(),
-                rough_first_texel,
-            },
-        );
         let mut knots: Vec<[f32; 4]> = Vec::new();
         let mut materials: Vec<ObjectMaterial> = Vec::new();
         for (i, (object, object_knots)) in scene.objects.iter().zip(object_knots).enumerate() {
@@ -320,6 +343,25 @@ impl DrawBuffers {
                 (first_knot, albedo_first),
                 &object.view_blur,
             ));
+        }
+        let mut frame = Frame::new(
+            scene.camera,
+            settings.width,
+            settings.height,
+            scene_radius,
+            scene.lights,
+            &EnvironmentUniforms {
+                enabled: scene.environment.is_some(),
+                layer_betas: environment.betas.clone(),
+                layer_faces: environment.layer_faces(),
+                brdf_lights,
+            },
+        );
+        if brdf_lights.is_some() {
+            let ms = scene.objects.iter().map(|object| object.brdf.beckmann_m);
+            frame.append_light_bins(&mut knots, ms);
+        }
+        for i in 0..materials.len() {
             frame.draw_info = [i as i32 + 1, 0, 0, 0];
             match self.object_frames.get_mut(i) {
                 Some(buffer) => buffer.write(std::slice::from_ref(&frame))?,
