@@ -2,17 +2,18 @@
 //! out of it as directional lights, whose specular term is then evaluated exactly, f_spec·E·(N·l),
 //! instead of through the lobe quadrature's lookups. A lookup blurs a source into its footprint and
 //! finds a small one only when a sample's footprint happens to cover it; one light per bright
-//! block has neither problem. Everything else (the residual, bright pixels clamped to the
-//! threshold) is prefiltered and read by the quadrature as before. Residual plus lights is the map
-//! exactly: each bright pixel p gives the light (p − p·T/Y)·dω and keeps p·T/Y. Measured in
-//! BENCHMARKS.md ("The `brdf` environment model").
+//! block has neither problem. Everything else (the residual, bright pixels cut down to what
+//! `Residual` leaves) is prefiltered and read by the quadrature as before. Residual plus lights
+//! is the map exactly: each bright pixel p of luminance Y keeps p·K/Y (K = T, the threshold, in
+//! the first split; from T down to 0 at 2T in the rough one) and gives its light (p − p·K/Y)·dω.
+//! Measured in BENCHMARKS.md ("The `brdf` environment model").
 //!
 //! Two splits of one map: [`split_bright`] (at most `MAX_ENV_LIGHTS` blocks, the brightest) for
 //! the paths' hits and the narrowest lobes, and [`split_bright_rough`] (every bright block, in
 //! blocks grown until there are at most `ROUGH_MAX_ENV_LIGHTS`) for every lobe the camera sees
 //! whose width its blocks allow: a studio's light boxes are hundreds of blocks, and those left in
 //! the layers were what a lobe's tails met from dark pixels (studio, m = 0.2: mean error 4.3 →
-//! 1.1 %; m = 0.05, sphere relative RMSE 3.1 → 0.55 %). Each light keeps its block's spread, which
+//! 1.1 %; m = 0.05, sphere relative RMSE 3.1 → 0.40 %). Each light keeps its block's spread, which
 //! the lobe is widened by (`brdf_quadrature::bright_light`), so a block as wide as the lobe is
 //! still a good light.
 
@@ -108,15 +109,21 @@ struct Block {
 /// kept stay in the residual as they are, so nothing is lost either way.
 pub fn split_bright(map: &Equirect) -> BrightSplit {
     let block = (map.width / BRIGHT_GRID_WIDTH).max(1);
-    split_in_blocks(map, bright_threshold(map), block, MAX_ENV_LIGHTS)
+    split_in_blocks(
+        map,
+        bright_threshold(map),
+        (block, MAX_ENV_LIGHTS),
+        Residual::Threshold,
+    )
 }
 
 /// The split the quadratures read where the camera looks (the grid's and filtered importance
 /// sampling's, and the lattice's where its blocks are at most `ROUGH_LATTICE_BLOCK`·m across):
-/// every bright block a light, so the residual holds nothing above the threshold. The blocks
-/// start as [`split_bright`]'s and double in size until there are at most `ROUGH_MAX_ENV_LIGHTS`
-/// of them; a block is then a few degrees across, and its spread widens the lobe it meets
-/// (BENCHMARKS.md, "Where the remaining error is").
+/// every bright block a light, so the residual holds nothing above the threshold (and nothing at
+/// all of a pixel above twice it: `Residual::Ramp`). The blocks start as [`split_bright`]'s and
+/// double in size until there are at most `ROUGH_MAX_ENV_LIGHTS` of them; a block is then a few
+/// degrees across, and its spread widens the lobe it meets (BENCHMARKS.md, "Where the remaining
+/// error is").
 pub fn split_bright_rough(map: &Equirect) -> BrightSplit {
     let threshold = bright_threshold(map);
     let bright: Vec<(u32, u32)> = (0..map.height)
@@ -135,7 +142,12 @@ pub fn split_bright_rough(map: &Equirect) -> BrightSplit {
     while blocks(block) > ROUGH_MAX_ENV_LIGHTS && block < map.width {
         block *= 2;
     }
-    split_in_blocks(map, threshold, block, ROUGH_MAX_ENV_LIGHTS)
+    split_in_blocks(
+        map,
+        threshold,
+        (block, ROUGH_MAX_ENV_LIGHTS),
+        Residual::Ramp,
+    )
 }
 
 /// Whether pixel `p` is bright. Written so that a NaN pixel (load replaces them) or a zero
@@ -158,9 +170,36 @@ fn bright_threshold(map: &Equirect) -> f64 {
     BRIGHT_THRESHOLD * total / (4.0 * PI)
 }
 
+/// What a bright pixel leaves in the residual; the rest goes to its block's light.
+#[derive(Clone, Copy)]
+enum Residual {
+    /// The threshold T: a bright region stays in the layers as a plateau at T.
+    Threshold,
+    /// T at the threshold falling to 0 at 2T, nothing above: a light box leaves no plateau whose
+    /// edges the lookups would alias, and a region just above T no new edge (the residual is
+    /// continuous in the pixel's luminance). Measured in BENCHMARKS.md ("The rough split leaves
+    /// no plateau").
+    Ramp,
+}
+
+impl Residual {
+    /// The luminance a pixel of luminance `y` > `threshold` keeps.
+    fn kept(self, y: f64, threshold: f64) -> f64 {
+        match self {
+            Residual::Threshold => threshold,
+            Residual::Ramp => (2.0 * threshold - y).clamp(0.0, threshold),
+        }
+    }
+}
+
 /// The split with `block`-pixel blocks and at most `max_lights` lights (see [`split_bright`]),
-/// bright above `threshold` ([`bright_threshold`]).
-fn split_in_blocks(map: &Equirect, threshold: f64, block: u32, max_lights: usize) -> BrightSplit {
+/// bright above `threshold` ([`bright_threshold`]), each bright pixel leaving `leaves` behind.
+fn split_in_blocks(
+    map: &Equirect,
+    threshold: f64,
+    (block, max_lights): (u32, usize),
+    leaves: Residual,
+) -> BrightSplit {
     let (w, h) = (map.width, map.height);
     let blocks_x = w.div_ceil(block);
     let mut blocks: Vec<(u32, Block)> = Vec::new();
@@ -174,7 +213,8 @@ fn split_in_blocks(map: &Equirect, threshold: f64, block: u32, max_lights: usize
                 continue;
             }
             let y_lum = luminance(p);
-            let keep = threshold / y_lum;
+            let kept_lum = leaves.kept(y_lum, threshold);
+            let keep = kept_lum / y_lum;
             let kept = p.map(|c| (f64::from(c) * keep) as f32);
             let excess: [f64; 3] =
                 std::array::from_fn(|c| (f64::from(p[c]) - f64::from(kept[c])) * dw);
@@ -193,7 +233,7 @@ fn split_in_blocks(map: &Equirect, threshold: f64, block: u32, max_lights: usize
                 blocks.len() - 1
             });
             let b = &mut blocks[slot].1;
-            let weight = (y_lum - threshold) * dw;
+            let weight = (y_lum - kept_lum) * dw;
             b.pixels.push((index, kept));
             b.centroid += weight * pixel_direction(x, y, w, h);
             b.weight += weight;
@@ -301,6 +341,17 @@ mod tests {
         }
     }
 
+    /// Between the threshold and twice it, the rough split's residual falls from T to 0, so it is
+    /// continuous in the pixel's luminance; the first split's stays at T.
+    #[test]
+    fn the_rough_residual_ramps_down_to_nothing_at_twice_the_threshold() {
+        let t = 2.0;
+        for (y, want) in [(2.0, 2.0), (2.5, 1.5), (3.0, 1.0), (4.0, 0.0), (100.0, 0.0)] {
+            assert_eq!(Residual::Ramp.kept(y, t), want, "{y}");
+            assert_eq!(Residual::Threshold.kept(y, t), t, "{y}");
+        }
+    }
+
     #[test]
     fn the_rough_split_takes_every_bright_block_in_few_lights() {
         // 40 × 20 bright pixels in one patch and 600 scattered ones: far more blocks than
@@ -339,9 +390,18 @@ mod tests {
             let lights: f64 = split.lights.iter().map(|l| l.irradiance[c]).sum();
             assert!((kept + lights - map_sum).abs() <= 1e-6 * map_sum);
         }
-        // A map the bright split already takes whole is split the same way.
+        // The patch and the scattered pixels, far above twice the threshold, leave nothing.
+        assert_eq!(split.residual.pixels[110 * 512 + 220], [0.0; 3]);
+        assert_eq!(split.residual.pixels[10 * 512], [0.0; 3]);
+        // A map the bright split already takes whole gives the same lights in the same places,
+        // each with its whole pixel now (the first split leaves the threshold in the residual).
         let lamp = lamp_map();
-        assert_eq!(split_bright_rough(&lamp), split_bright(&lamp));
+        let (rough, first) = (split_bright_rough(&lamp), split_bright(&lamp));
+        assert_eq!(rough.lights.len(), first.lights.len());
+        for (r, f) in rough.lights.iter().zip(&first.lights) {
+            assert!((r.direction - f.direction).length() < 1e-12);
+            assert!(r.irradiance[0] > f.irradiance[0]);
+        }
     }
 
     #[test]
