@@ -375,6 +375,23 @@ impl DrawBuffers {
         }
         frame.draw_info = [0; 4];
         frame.background_color = scene.background.clear_color();
+        let limit = u64::from(gpu.info().max_texel_buffer_elements);
+        if knots.len() as u64 > limit {
+            let fix = match brdf_lights {
+                Some(_) => "use the `paper` environment model (no light bins) or fewer objects",
+                None => "use fewer objects",
+            };
+            return Err(crate::Error::invalid(
+                "objects",
+                scene.objects.len(),
+                format!(
+                    "the draw's tables (each object's Fresnel and albedo knots, and the `brdf` \
+                     model's light bins) take {} texels, and this device's texel buffers hold at \
+                     most {limit}; {fix}",
+                    knots.len()
+                ),
+            ));
+        }
         self.scene_frame.write(std::slice::from_ref(&frame))?;
         let texel = BufferUsage::UNIFORM_TEXEL;
         write_growing(gpu, &mut self.knots, "fresnel knots", &knots, texel)?;
