@@ -72,6 +72,7 @@ fn bench(
         layers: 8,
         beta_min: 0.02,
         beta_max: 1.0,
+        layer_texel: 1.0,
     };
     let mut gpu_times = Vec::new();
     let mut cpu_seconds = Vec::new();

@@ -4,7 +4,7 @@
 //
 // Three quadratures of the lookups, picked (or two blended) by the material's m: for a narrow
 // lobe (m ≤ 0.06) a lattice of nodes on the plane of incidence, each read at the blur that gives
-// the lobe's width across the plane (`specular_lattice`: one lookup face-on, up to 33 at
+// the lobe's width across the plane (`specular_lattice`: three lookups face-on, up to 25 at
 // grazing); for a middling one (0.07 ≤ m ≤ 0.22, the rough preset) a grid of slopes from the
 // lobe's Gaussian less the lookups' blur (`specular_grid`, ~100 lookups); for a wide one
 // (m ≥ 0.3) `samples` half vectors from a Fibonacci lattice in the Beckmann
@@ -338,12 +338,17 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
     float spacing = frame.env_lattice.x;
     float max_half = frame.env_lattice.w;
     float sigma = p.beckmann_m * 0.70710678;
-    float beta0 = 2.0 * nv * sigma * frame.env_lattice_share.x;
-    float sigma_p = sqrt(max(sigma * sigma - 0.25 * beta0 * beta0, 0.0));
+    float share = frame.env_lattice_share.x;
+    float beta0 = 2.0 * nv * sigma * share;
+    // σ² − (β0/2)² without cancellation: 0 at normal incidence (twin's comment).
+    vec3 nxv = cross(n, v);
+    float sigma_p = sigma * sqrt(max(1.0 - share * share + share * share * dot(nxv, nxv), 0.0));
     float reach = frame.env_lattice.y * sigma_p;
-    float step = max(spacing * 0.5 * beta0, reach / max_half);
+    float step = max(min(spacing * 0.5 * beta0, frame.env_lattice_share.w * sigma_p),
+        reach / max_half);
     float beta = max(beta0, 2.0 * step / spacing);
-    int half_count = int(min(ceil(reach / step), max_half));
+    // At normal incidence σ_p, the reach and the step are 0: the mirror direction alone.
+    int half_count = step > 0.0 ? int(min(ceil(reach / step), max_half)) : 0;
     // Every node reads the same blur: its layers and blend found once.
     int k0;
     float t;

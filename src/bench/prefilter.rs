@@ -49,6 +49,7 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<PrefilterBench> {
         layers: config.prefilter_layers,
         beta_min: 0.02,
         beta_max: 1.0,
+        layer_texel: 1.0,
     };
     params.validate()?;
     let prefilter = GpuPrefilter::new(gpu)?;

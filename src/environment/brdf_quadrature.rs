@@ -201,11 +201,20 @@ impl LookupSums {
 /// Measured in BENCHMARKS.md ("The `brdf` environment model"); packed into `Frame::env_lattice`
 /// and `env_lattice_share` for the shaders.
 /// t = 1 keeps the default scene within the issue's ≤ 1.5× `paper`; t = 0.93, spacing 1.7, reach
-/// 3.0 is a third more accurate on a sphere and costs ~1.6× (BENCHMARKS.md).
+/// 3.0 is a third more accurate on a sphere and costs ~1.6× (BENCHMARKS.md). At most 12 nodes a
+/// side (16 before `LATTICE_MAX_STEP`): the three nodes face-on cost what the grazing ones gave
+/// back, and the 112 points' means moved by ≤ 0.1 % (BENCHMARKS.md).
 pub const LATTICE_BLUR_SHARE: f64 = 1.0;
 pub const LATTICE_SPACING: f64 = 2.0;
 pub const LATTICE_REACH: f64 = 2.5;
-pub const LATTICE_MAX_HALF: u32 = 16;
+pub const LATTICE_MAX_HALF: u32 = 12;
+/// The widest node step, in standard deviations σ_p of the nodes' distribution. Towards normal
+/// incidence the blur's step (2·nv·σ) outgrows σ_p, and the ±1 nodes fell outside the reach: one
+/// lookup, and the in-plane variance σ_p² the blur does not supply was lost (dark points beside
+/// the courtyard's bright sky read −25 %, its board at 60° was 9.9 % off at m = 0.05). At √3·σ_p
+/// the three nodes carry Gaussian weights close to the 3-point Gauss–Hermite rule's (1/6, 2/3,
+/// 1/6), which has the variance and the fourth moment of the Gaussian: that board 1.4 %.
+pub const LATTICE_MAX_STEP: f64 = 1.732_050_807_568_877_2;
 /// The share of the reach over which the node weights fall to 0 ([`lattice_taper`]; the lattice
 /// and the grid).
 pub const LATTICE_TAPER: f64 = 0.2;
@@ -269,7 +278,8 @@ pub fn lattice_taper(x: f64) -> f64 {
 /// (t a little under 1 measured better on a sphere: the lookups are a little wider than their
 /// nominal blur, the lobe's profile across the plane lighter-tailed than their Gaussian) and a
 /// share of the width along it; the nodes lie on the plane of incidence at slopes p spaced
-/// `LATTICE_SPACING`·β/2 apart, weighted by the Gaussian of the rest of the in-plane variance,
+/// `LATTICE_SPACING`·β/2 apart (at most `LATTICE_MAX_STEP`·σ_p), weighted by the Gaussian of the
+/// rest of the in-plane variance,
 /// σ_p² = σ² − (β/2)²,
 /// times F·G·(V·H)/(nv·nh) (`lattice_taper` at the reach). At normal incidence that is one
 /// lookup; towards grazing, more (at most 2·`LATTICE_MAX_HALF` + 1, the spacing and blur growing
@@ -285,11 +295,23 @@ pub fn specular_lattice(
     };
     let sigma = brdf.beckmann_m / std::f64::consts::SQRT_2;
     let beta0 = 2.0 * nv * sigma * LATTICE_BLUR_SHARE;
-    let sigma_p = (sigma * sigma - (0.5 * beta0).powi(2)).max(0.0).sqrt();
+    // σ² − (β0/2)² = σ²·(1 − t² + t²·|N × V|²): 0 at normal incidence in f32 as in f64, where
+    // 1 − nv² would leave the shader nodes a rounding apart, astride a cube edge under N.
+    let t2 = LATTICE_BLUR_SHARE * LATTICE_BLUR_SHARE;
+    let sigma_p = sigma
+        * (1.0 - t2 + t2 * n.cross(v).length_squared())
+            .max(0.0)
+            .sqrt();
     let reach = LATTICE_REACH * sigma_p;
-    let step = (LATTICE_SPACING * 0.5 * beta0).max(reach / f64::from(LATTICE_MAX_HALF));
+    let step = (LATTICE_SPACING * 0.5 * beta0)
+        .min(LATTICE_MAX_STEP * sigma_p)
+        .max(reach / f64::from(LATTICE_MAX_HALF));
     let beta = beta0.max(2.0 * step / LATTICE_SPACING);
-    let half = (reach / step).ceil().min(f64::from(LATTICE_MAX_HALF)) as i32;
+    // At normal incidence σ_p, the reach and the step are 0: the mirror direction alone.
+    let half = match step > 0.0 {
+        true => (reach / step).ceil().min(f64::from(LATTICE_MAX_HALF)) as i32,
+        false => 0,
+    };
     let mut sums = LookupSums::default();
     for i in -half..=half {
         let slope = f64::from(i) * step;

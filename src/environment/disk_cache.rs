@@ -57,6 +57,7 @@ impl CacheKey {
         for x in [
             params.beta_min,
             params.beta_max,
+            params.layer_texel,
             light.intensity,
             light.rotation_deg,
         ] {
@@ -296,6 +297,7 @@ mod tests {
             layers: 2,
             beta_min: 0.5,
             beta_max: 1.0,
+            layer_texel: 1.0,
         };
         let source = Equirect::constant(4, 2, [1.0, 0.5, 0.25]);
         let key = CacheKey::new(&source, &params, EnvironmentLight::default());
@@ -339,6 +341,11 @@ mod tests {
             ..params
         };
         assert_ne!(key, CacheKey::new(&source, &more_layers, light(1.0, 0.0)));
+        let finer_layers = PrefilterParams {
+            layer_texel: 0.5,
+            ..params
+        };
+        assert_ne!(key, CacheKey::new(&source, &finer_layers, light(1.0, 0.0)));
     }
 
     #[test]

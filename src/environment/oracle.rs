@@ -393,6 +393,7 @@ mod tests {
             layers: 6,
             beta_min: 0.02,
             beta_max: 1.0,
+            layer_texel: 1.0,
         };
         let env = prefilter_cpu(
             &Equirect::constant(64, 32, c),
@@ -634,6 +635,7 @@ mod tests {
             layers: 2,
             beta_min: 0.5,
             beta_max: 0.5,
+            layer_texel: 1.0,
         };
         assert!(prefilter_cpu(&src, &good, EnvironmentLight::new(f64::NAN, 0.0)).is_err());
         assert!(prefilter_cpu(&src, &good, EnvironmentLight::new(-1.0, 0.0)).is_err());

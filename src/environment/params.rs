@@ -50,7 +50,18 @@ pub struct PrefilterParams {
     pub layers: u32,
     pub beta_min: f64,
     pub beta_max: f64,
+    /// The widest a blurred layer's texel may be at its face centre, as a share of the layer's β
+    /// ([`layer_face_size`]): 1 for SPEC's `paper` layers, [`BRDF_LAYER_TEXEL`] for `brdf`'s.
+    pub layer_texel: f64,
 }
+
+/// [`PrefilterParams::layer_texel`] of the `brdf` model's layers: two thirds of β, so at most
+/// 1.5 texels across σ. Its lookups read a layer at the blur of their own node or sample, and a
+/// bilinear read between texels as wide as σ is off by up to h²/(8σ²) ≈ 12 % on the peak of a
+/// narrow feature (the studio board at 25°, m = 0.05: 9.2 % relative RMSE, 3.3 % at 2/3 of β);
+/// half of β was a little better still but quadrupled the prefilter (BENCHMARKS.md, "Layers
+/// that resolve the lattice's blur").
+pub const BRDF_LAYER_TEXEL: f64 = 2.0 / 3.0;
 
 impl PrefilterParams {
     /// SPEC defaults (K = 8, β 0.02 … 1.0) with the face size chosen from the source width.
@@ -60,21 +71,27 @@ impl PrefilterParams {
             layers: 8,
             beta_min: 0.02,
             beta_max: 1.0,
+            layer_texel: 1.0,
         }
     }
 
     /// [`for_source_width`](Self::for_source_width) for the environment model that draws with
     /// the layers: SPEC §4's K = 8 for `paper`; for `brdf`, whose lookups read the layer whose
-    /// blur matches each node's or sample's, `BRDF_LAYERS` over the same β range (a step of ×1.32
+    /// blur matches each node's or sample's, `BRDF_LAYERS` at [`BRDF_LAYER_TEXEL`] over the same
+    /// β range (a step of ×1.32
     /// instead of ×1.92 between layers: the blend of two layers is further from the blur between
     /// them the further apart they are; BENCHMARKS.md, "The `brdf` environment model").
     pub fn for_model(width: u32, model: EnvironmentModel) -> Self {
-        let layers = match model {
-            EnvironmentModel::Paper => 8,
-            EnvironmentModel::Brdf => crate::environment::brdf_quadrature::BRDF_LAYERS,
+        let (layers, layer_texel) = match model {
+            EnvironmentModel::Paper => (8, 1.0),
+            EnvironmentModel::Brdf => (
+                crate::environment::brdf_quadrature::BRDF_LAYERS,
+                BRDF_LAYER_TEXEL,
+            ),
         };
         Self {
             layers,
+            layer_texel,
             ..Self::for_source_width(width)
         }
     }
@@ -101,6 +118,13 @@ impl PrefilterParams {
             if !(value.is_finite() && value > 0.0 && value <= 4.0) {
                 return Err(Error::invalid(field, value, "must be in (0, 4]"));
             }
+        }
+        if !(0.25..=1.0).contains(&self.layer_texel) {
+            return Err(Error::invalid(
+                "layer_texel",
+                self.layer_texel,
+                "must be in [0.25, 1] (a blurred layer's texel as a share of its β)",
+            ));
         }
         if self.beta_max < self.beta_min {
             return Err(Error::invalid(
@@ -134,7 +158,7 @@ impl PrefilterParams {
                     face_size: if k == 0 {
                         self.face_size
                     } else {
-                        layer_face_size(beta, self.face_size)
+                        layer_face_size(beta, self.layer_texel, self.face_size)
                     },
                 }
             })
@@ -246,11 +270,15 @@ pub struct LayerPlan {
 }
 
 /// Face size for lobe width β: the smallest power of two whose texel at the face centre, (π/2)/M
-/// radians, is no wider than β, clamped to [MIN_LAYER_FACE, N]. Texels as wide as the lobe's σ add
-/// only h²/12 ≈ 8 % of σ² of extra variance from the box-filtered source (≈ 4 % in width), and keep
-/// the brute-force convolution's window at ~(10β/h)² ≈ 100–300 texels per output texel.
-pub fn layer_face_size(beta: f64, face_size: u32) -> u32 {
-    let wanted = (std::f64::consts::FRAC_PI_2 / beta).ceil().max(1.0);
+/// radians, is no wider than `texel`·β, clamped to [MIN_LAYER_FACE, N]. Texels as wide as the
+/// lobe's σ (`texel` = 1, SPEC's layers) add only h²/12 ≈ 8 % of σ² of extra variance from the
+/// box-filtered source (≈ 4 % in width), and keep the brute-force convolution's window at
+/// ~(10β/h)² ≈ 100–300 texels per output texel; finer texels cost that window's growth on top
+/// of the texels' ([`BRDF_LAYER_TEXEL`]).
+pub fn layer_face_size(beta: f64, texel: f64, face_size: u32) -> u32 {
+    let wanted = (std::f64::consts::FRAC_PI_2 / (texel * beta))
+        .ceil()
+        .max(1.0);
     let pow2 = if wanted >= f64::from(face_size) {
         face_size
     } else {
@@ -355,11 +383,26 @@ mod tests {
             layers: 8,
             beta_min: 0.02,
             beta_max: 1.0,
+            layer_texel: 1.0,
         };
         let faces: Vec<u32> = p.plan().iter().map(|l| l.face_size).collect();
         // π/2/0.02 = 78.5 → 128; β_2 = 0.0384 → 40.9 → 64; … β_5 = 0.27 → 5.8 → 8 → clamped to 16.
         assert_eq!(faces, vec![512, 128, 64, 32, 16, 16, 16, 16]);
         assert_eq!(p.mip_faces(), vec![512, 256, 128, 64, 32, 16]);
+    }
+
+    #[test]
+    fn brdf_layers_have_a_texel_of_two_thirds_of_beta() {
+        let p = PrefilterParams::for_model(1024, EnvironmentModel::Brdf);
+        let faces: Vec<u32> = p.plan().iter().map(|l| l.face_size).collect();
+        // β_k = 0.02·50^((k−1)/14); M ≥ 1.5·(π/2)/β_k: β_1 117.8 → 128, β_2 = 0.0264 → 89.1 →
+        // 128, β_3 = 0.0349 → 67.4 → 128, β_4 = 0.0461 → 51.0 → 64, … β_9 = 0.186 → 12.7 → 16.
+        assert_eq!(
+            faces,
+            vec![256, 128, 128, 128, 64, 64, 32, 32, 32, 16, 16, 16, 16, 16, 16, 16]
+        );
+        let paper = PrefilterParams::for_model(1024, EnvironmentModel::Paper);
+        assert_eq!(paper, PrefilterParams::for_source_width(1024));
     }
 
     #[test]

@@ -29,6 +29,7 @@ fn small_params(face_size: u32) -> PrefilterParams {
         layers: 8,
         beta_min: 0.02,
         beta_max: 1.0,
+        layer_texel: 1.0,
     }
 }
 
@@ -558,6 +559,7 @@ fn step_one_reads_exactly_the_oracles_source_pixels() {
             layers: 2,
             beta_min: 1.0,
             beta_max: 1.0,
+            layer_texel: 1.0,
         };
         let env = prefilter
             .run(&gpu, &source, &params, EnvironmentLight::new(1.0, rotation))

@@ -45,6 +45,7 @@ fn synthetic_params() -> PrefilterParams {
         layers: 8,
         beta_min: 0.02,
         beta_max: 1.0,
+        layer_texel: 1.0,
     }
 }
 

@@ -225,7 +225,8 @@ shader_interface! {
             /// x: the lattice's blur share t (`LATTICE_BLUR_SHARE`); y: the least m whose lattice
             /// reads the rough split where the camera looks (brdf_quadrature.rs
             /// `rough_lattice_m`); z: the largest m the rough lights' direction bins serve (the
-            /// draw's largest up to `LATTICE_M_LO`).
+            /// draw's largest up to `LATTICE_M_LO`); w: the lattice's widest node step in σ_p
+            /// (`LATTICE_MAX_STEP`).
             env_lattice_share: vec4,
             /// The rough materials' bright split (environment/bright.rs `split_bright_rough`),
             /// which the grid and filtered importance sampling read where the camera looks (and

@@ -147,6 +147,7 @@ impl Frame {
         // y, the rough split's lattice threshold, is the lights' (`set_brdf_lights`); z the
         // light bins' (`append_light_bins`).
         self.env_lattice_share[0] = q::LATTICE_BLUR_SHARE as f32;
+        self.env_lattice_share[3] = q::LATTICE_MAX_STEP as f32;
         self.env_grid = [
             q::GRID_BLUR_SHARE as f32,
             q::GRID_SPACING as f32,
