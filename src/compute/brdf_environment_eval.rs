@@ -73,7 +73,7 @@ pub fn brdf_environment_specular_gpu(
         ..ObjectMaterial::new(brdf, fresnel)
     };
     knots.extend(albedo_knots(brdf, fresnel));
-    frame.append_light_bins(&mut knots, [brdf.beckmann_m]);
+    frame.append_light_bins(&mut knots, [brdf.beckmann_m], &mut Default::default());
     let params = BrdfEvalParams {
         material,
         row_count: [rows as u32, 0, 0, 0],

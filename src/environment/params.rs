@@ -50,17 +50,17 @@ pub struct PrefilterParams {
     pub layers: u32,
     pub beta_min: f64,
     pub beta_max: f64,
-    /// The widest a blurred layer's texel may be at its face centre, as a share of the layer's β
+    /// The widest a blurred layer's texel, (π/2)/M, may be as a share of the layer's β
     /// ([`layer_face_size`]): 1 for SPEC's `paper` layers, [`BRDF_LAYER_TEXEL`] for `brdf`'s.
     pub layer_texel: f64,
 }
 
-/// [`PrefilterParams::layer_texel`] of the `brdf` model's layers: two thirds of β, so at most
+/// [`PrefilterParams::layer_texel`] of the `brdf` model's layers: two thirds of β, so at least
 /// 1.5 texels across σ. Its lookups read a layer at the blur of their own node or sample, and a
 /// bilinear read between texels as wide as σ is off by up to h²/(8σ²) ≈ 12 % on the peak of a
 /// narrow feature (the studio board at 25°, m = 0.05: 9.2 % relative RMSE, 3.3 % at 2/3 of β);
-/// half of β was a little better still but quadrupled the prefilter (BENCHMARKS.md, "Layers
-/// that resolve the lattice's blur").
+/// half of β was a little better still (3.0 %) but took a cold `brdf` start of the default scene
+/// from 2.45 to 5.75 s (BENCHMARKS.md, "Layers that resolve the lattice's blur").
 pub const BRDF_LAYER_TEXEL: f64 = 2.0 / 3.0;
 
 impl PrefilterParams {
@@ -269,8 +269,9 @@ pub struct LayerPlan {
     pub face_size: u32,
 }
 
-/// Face size for lobe width β: the smallest power of two whose texel at the face centre, (π/2)/M
-/// radians, is no wider than `texel`·β, clamped to [MIN_LAYER_FACE, N]. Texels as wide as the
+/// Face size for lobe width β: the smallest power of two whose texel, (π/2)/M radians (its mean
+/// width along a face's centre line: 2/M at the face centre, 1/M at the middle of an edge), is no
+/// wider than `texel`·β, clamped to [MIN_LAYER_FACE, N]. Texels as wide as the
 /// lobe's σ (`texel` = 1, SPEC's layers) add only h²/12 ≈ 8 % of σ² of extra variance from the
 /// box-filtered source (≈ 4 % in width), and keep the brute-force convolution's window at
 /// ~(10β/h)² ≈ 100–300 texels per output texel; finer texels cost that window's growth on top

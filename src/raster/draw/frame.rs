@@ -189,6 +189,7 @@ impl Frame {
         &mut self,
         knots: &mut Vec<[f32; 4]>,
         ms: impl IntoIterator<Item = f64>,
+        cache: &mut LightBinCache,
     ) {
         let limit = crate::environment::brdf_quadrature::LATTICE_M_LO as f32;
         let binned = ms
@@ -204,7 +205,7 @@ impl Frame {
             .zip(self.env_rough_light_irradiance[..count].iter().copied())
             .collect();
         self.env_rough[2] = knots.len() as i32;
-        knots.extend(light_bin_texels(&lights, f64::from(binned)));
+        knots.extend_from_slice(cache.texels(lights, binned));
     }
 
     /// Packs one draw's camera, lights and environment. `lights.len()` must be ≤ MAX_LIGHTS
@@ -272,6 +273,33 @@ pub(super) type Knots = Vec<[f32; 4]>;
 
 /// Fresnel knots the knot buffer holds before it must grow (the built-in tables have 91 each).
 const INITIAL_KNOTS: usize = 512;
+/// The last direction bins made for a draw ([`Frame::append_light_bins`]), kept with the draw's
+/// buffers: they depend only on the map's rough lights and the draw's largest binned m, so the
+/// draws of a batch over one map make them once (each making took ~3 ms and ~57k texels with 128
+/// lights).
+#[derive(Default)]
+pub(crate) struct LightBinCache {
+    /// The packed lights and the bits of the f32 m the texels were made for.
+    key: Option<(Vec<PackedLight>, u32)>,
+    texels: Vec<[f32; 4]>,
+}
+
+/// A light as the frame packs it ([`pack_light`]).
+type PackedLight = ([f32; 4], [f32; 4]);
+
+impl LightBinCache {
+    /// The bins of `lights` (as the frame packs them) for every m up to `max_m`, made unless the
+    /// last call had the same lights and m.
+    fn texels(&mut self, lights: Vec<PackedLight>, max_m: f32) -> &[[f32; 4]] {
+        let key = (lights, max_m.to_bits());
+        if self.key.as_ref() != Some(&key) {
+            self.texels = light_bin_texels(&key.0, f64::from(max_m));
+            self.key = Some(key);
+        }
+        &self.texels
+    }
+}
+
 /// Objects the material buffer holds before it must grow.
 const INITIAL_OBJECTS: usize = 8;
 
@@ -287,6 +315,8 @@ pub(super) struct DrawBuffers {
     pub knots: Buffer,
     /// Every object's [`ObjectMaterial`].
     pub materials: Buffer,
+    /// The `brdf` model's light bins of the last draw.
+    light_bins: LightBinCache,
 }
 
 impl DrawBuffers {
@@ -311,6 +341,7 @@ impl DrawBuffers {
                 &[ObjectMaterial::zeroed(); INITIAL_OBJECTS],
                 BufferUsage::UNIFORM_TEXEL,
             )?,
+            light_bins: LightBinCache::default(),
         })
     }
 
@@ -360,7 +391,7 @@ impl DrawBuffers {
         );
         if brdf_lights.is_some() {
             let ms = scene.objects.iter().map(|object| object.brdf.beckmann_m);
-            frame.append_light_bins(&mut knots, ms);
+            frame.append_light_bins(&mut knots, ms, &mut self.light_bins);
         }
         for i in 0..materials.len() {
             frame.draw_info = [i as i32 + 1, 0, 0, 0];
@@ -421,4 +452,49 @@ fn write_growing<T: bytemuck::Pod>(
         buffer.write(data)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lights(count: usize, spread: f32) -> Vec<([f32; 4], [f32; 4])> {
+        (0..count)
+            .map(|i| {
+                let a = i as f32 * 0.7;
+                ([a.cos(), 0.3, a.sin(), spread], [i as f32, 1.0, 1.0, 0.0])
+            })
+            .map(|(d, e)| {
+                let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                ([d[0] / n, d[1] / n, d[2] / n, d[3]], e)
+            })
+            .collect()
+    }
+
+    /// The cache hands back what the bins of its lights and m are, and makes them again when
+    /// either changes.
+    #[test]
+    fn light_bin_cache_is_the_bins_of_its_last_key() {
+        let mut cache = LightBinCache::default();
+        let first = lights(20, 0.0);
+        assert_eq!(
+            cache.texels(first.clone(), 0.05),
+            light_bin_texels(&first, 0.05)
+        );
+        assert_eq!(
+            cache.texels(first.clone(), 0.05),
+            light_bin_texels(&first, 0.05)
+        );
+        // Another m: the cull, and with it the lists, change.
+        let wider = light_bin_texels(&first, 0.06);
+        assert_ne!(wider, light_bin_texels(&first, 0.05));
+        assert_eq!(cache.texels(first.clone(), 0.06), wider);
+        // Other lights (a spread on each).
+        let spread = lights(20, 1e-3);
+        assert_ne!(light_bin_texels(&spread, 0.06), wider);
+        assert_eq!(
+            cache.texels(spread.clone(), 0.06),
+            light_bin_texels(&spread, 0.06)
+        );
+    }
 }
