@@ -203,7 +203,7 @@ impl LookupSums {
 /// t = 1 keeps the default scene within the issue's ≤ 1.5× `paper`; t = 0.93, spacing 1.7, reach
 /// 3.0 is a third more accurate on a sphere and costs ~1.6× (BENCHMARKS.md). At most 12 nodes a
 /// side (16 before `LATTICE_MAX_STEP`): the three nodes face-on cost what the grazing ones gave
-/// back, and the 112 points' means moved by ≤ 0.1 % (BENCHMARKS.md).
+/// back, and the 112 points' means moved by ≤ 0.11 % (BENCHMARKS.md).
 pub const LATTICE_BLUR_SHARE: f64 = 1.0;
 pub const LATTICE_SPACING: f64 = 2.0;
 pub const LATTICE_REACH: f64 = 2.5;
