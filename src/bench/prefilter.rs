@@ -50,6 +50,7 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<PrefilterBench> {
         beta_min: 0.02,
         beta_max: 1.0,
         layer_texel: 1.0,
+        fine_layer: false,
     };
     params.validate()?;
     let prefilter = GpuPrefilter::new(gpu)?;

@@ -54,6 +54,7 @@ impl CacheKey {
         hash.update(bytemuck::cast_slice::<[f32; 3], u8>(&source.pixels));
         hash.update(params.face_size.to_le_bytes());
         hash.update(params.layers.to_le_bytes());
+        hash.update([u8::from(params.fine_layer)]);
         for x in [
             params.beta_min,
             params.beta_max,
@@ -298,6 +299,7 @@ mod tests {
             beta_min: 0.5,
             beta_max: 1.0,
             layer_texel: 1.0,
+            fine_layer: false,
         };
         let source = Equirect::constant(4, 2, [1.0, 0.5, 0.25]);
         let key = CacheKey::new(&source, &params, EnvironmentLight::default());
@@ -346,6 +348,11 @@ mod tests {
             ..params
         };
         assert_ne!(key, CacheKey::new(&source, &finer_layers, light(1.0, 0.0)));
+        let fine_layer = PrefilterParams {
+            fine_layer: true,
+            ..params
+        };
+        assert_ne!(key, CacheKey::new(&source, &fine_layer, light(1.0, 0.0)));
     }
 
     #[test]

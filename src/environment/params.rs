@@ -53,6 +53,9 @@ pub struct PrefilterParams {
     /// The widest a blurred layer's texel, (π/2)/M, may be as a share of the layer's β
     /// ([`layer_face_size`]): 1 for SPEC's `paper` layers, [`BRDF_LAYER_TEXEL`] for `brdf`'s.
     pub layer_texel: f64,
+    /// One more layer, at β_min/2, between the sharp layer 0 and β_min (the `brdf` model's:
+    /// [`BRDF_FINE_LAYER`]); false for SPEC's series.
+    pub fine_layer: bool,
 }
 
 /// [`PrefilterParams::layer_texel`] of the `brdf` model's layers: two thirds of β, so at least
@@ -63,6 +66,18 @@ pub struct PrefilterParams {
 /// from 2.45 to 5.75 s (BENCHMARKS.md, "Layers that resolve the lattice's blur").
 pub const BRDF_LAYER_TEXEL: f64 = 2.0 / 3.0;
 
+/// Whether the `brdf` model's layers have [`PrefilterParams::fine_layer`]. Its lookups narrower
+/// than β_min (the lattice across the plane of incidence at m ≤ 0.03, or towards grazing) blend
+/// layer 0 with the next; with the next at β_min = 0.02 a lookup at 0.01 was half a point read,
+/// not a blur, and a board at 25° under the studio at m = 0.02 was 19 % off (relative RMSE).
+/// Blurring layer 0 instead fails the lookups narrower still, at grazing, which need the sharp
+/// map (BENCHMARKS.md, "m = 0.02: the lookups between the sharp layer and the first blurred one").
+pub const BRDF_FINE_LAYER: bool = true;
+
+/// The `brdf` model's widest layer: with the fine layer the series from β_min has one step fewer,
+/// and this keeps its ratio (×1.32 per layer, [`PrefilterParams::for_model`]).
+pub const BRDF_BETA_MAX: f64 = 0.76;
+
 impl PrefilterParams {
     /// SPEC defaults (K = 8, β 0.02 … 1.0) with the face size chosen from the source width.
     pub fn for_source_width(width: u32) -> Self {
@@ -72,27 +87,27 @@ impl PrefilterParams {
             beta_min: 0.02,
             beta_max: 1.0,
             layer_texel: 1.0,
+            fine_layer: false,
         }
     }
 
     /// [`for_source_width`](Self::for_source_width) for the environment model that draws with
     /// the layers: SPEC §4's K = 8 for `paper`; for `brdf`, whose lookups read the layer whose
-    /// blur matches each node's or sample's, `BRDF_LAYERS` at [`BRDF_LAYER_TEXEL`] over the same
-    /// β range (a step of ×1.32
-    /// instead of ×1.92 between layers: the blend of two layers is further from the blur between
+    /// blur matches each node's or sample's, `BRDF_LAYERS` at [`BRDF_LAYER_TEXEL`]: the sharp
+    /// map, the fine layer at β_min/2 ([`BRDF_FINE_LAYER`]), then β_min … [`BRDF_BETA_MAX`] in
+    /// steps of ×1.32 instead of ×1.92 (the blend of two layers is further from the blur between
     /// them the further apart they are; BENCHMARKS.md, "The `brdf` environment model").
     pub fn for_model(width: u32, model: EnvironmentModel) -> Self {
-        let (layers, layer_texel) = match model {
-            EnvironmentModel::Paper => (8, 1.0),
-            EnvironmentModel::Brdf => (
-                crate::environment::brdf_quadrature::BRDF_LAYERS,
-                BRDF_LAYER_TEXEL,
-            ),
-        };
-        Self {
-            layers,
-            layer_texel,
-            ..Self::for_source_width(width)
+        let paper = Self::for_source_width(width);
+        match model {
+            EnvironmentModel::Paper => paper,
+            EnvironmentModel::Brdf => Self {
+                layers: crate::environment::brdf_quadrature::BRDF_LAYERS,
+                layer_texel: BRDF_LAYER_TEXEL,
+                fine_layer: BRDF_FINE_LAYER,
+                beta_max: BRDF_BETA_MAX,
+                ..paper
+            },
         }
     }
 
@@ -137,14 +152,20 @@ impl PrefilterParams {
     }
 
     /// β_k of SPEC §4: β_0 = 0; β_k = β_min·(β_max/β_min)^((k-1)/(K-2)) for k ≥ 1 (K = 2: β_1 = β_min).
+    /// With [`fine_layer`](Self::fine_layer), β_1 = β_min/2 and the series from β_min starts at
+    /// k = 2: β_k = β_min·(β_max/β_min)^((k-2)/(K-3)).
     pub fn beta(&self, k: u32) -> f64 {
         if k == 0 {
             return 0.0;
         }
-        if self.layers <= 2 {
+        let first = 1 + u32::from(self.fine_layer);
+        if k < first {
+            return 0.5 * self.beta_min;
+        }
+        if self.layers <= first + 1 {
             return self.beta_min;
         }
-        let t = f64::from(k - 1) / f64::from(self.layers - 2);
+        let t = f64::from(k - first) / f64::from(self.layers - 1 - first);
         self.beta_min * (self.beta_max / self.beta_min).powf(t)
     }
 
@@ -385,6 +406,7 @@ mod tests {
             beta_min: 0.02,
             beta_max: 1.0,
             layer_texel: 1.0,
+            fine_layer: false,
         };
         let faces: Vec<u32> = p.plan().iter().map(|l| l.face_size).collect();
         // π/2/0.02 = 78.5 → 128; β_2 = 0.0384 → 40.9 → 64; … β_5 = 0.27 → 5.8 → 8 → clamped to 16.
@@ -396,14 +418,30 @@ mod tests {
     fn brdf_layers_have_a_texel_of_two_thirds_of_beta() {
         let p = PrefilterParams::for_model(1024, EnvironmentModel::Brdf);
         let faces: Vec<u32> = p.plan().iter().map(|l| l.face_size).collect();
-        // β_k = 0.02·50^((k−1)/14); M ≥ 1.5·(π/2)/β_k: β_1 117.8 → 128, β_2 = 0.0264 → 89.1 →
-        // 128, β_3 = 0.0349 → 67.4 → 128, β_4 = 0.0461 → 51.0 → 64, … β_9 = 0.186 → 12.7 → 16.
+        // The fine layer β_1 = 0.01, then β_k = 0.02·38^((k−2)/13); M ≥ 1.5·(π/2)/β_k: β_1
+        // 235.6 → 256, β_2 117.8 → 128, β_3 = 0.0265 → 89.1 → 128, β_4 = 0.0350 → 67.3 → 128,
+        // β_5 = 0.0463 → 50.9 → 64, … β_10 = 0.188 → 12.6 → 16.
         assert_eq!(
             faces,
-            vec![256, 128, 128, 128, 64, 64, 32, 32, 32, 16, 16, 16, 16, 16, 16, 16]
+            vec![256, 256, 128, 128, 128, 64, 64, 32, 32, 32, 16, 16, 16, 16, 16, 16]
         );
         let paper = PrefilterParams::for_model(1024, EnvironmentModel::Paper);
         assert_eq!(paper, PrefilterParams::for_source_width(1024));
+    }
+
+    #[test]
+    fn the_fine_layer_sits_at_half_of_beta_min_before_the_series() {
+        let p = PrefilterParams::for_model(1024, EnvironmentModel::Brdf);
+        assert_eq!(p.beta(0), 0.0);
+        assert!((p.beta(1) - 0.01).abs() < 1e-15);
+        assert!((p.beta(2) - 0.02).abs() < 1e-15);
+        assert!((p.beta(15) - BRDF_BETA_MAX).abs() < 1e-12);
+        // The series' ratio is SPEC's K = 16 one's, 50^(1/14), within 0.1 %.
+        let ratio = p.beta(3) / p.beta(2);
+        assert!(
+            (ratio / 50f64.powf(1.0 / 14.0) - 1.0).abs() < 1e-3,
+            "{ratio}"
+        );
     }
 
     #[test]
