@@ -340,21 +340,32 @@ fn cli_image_size_beyond_what_the_argument_accepts_is_a_usage_error() {
 
 #[test]
 fn cli_image_size_beyond_the_device_limit_names_the_device_limit() {
-    // 20000 passes `--size` (1..=65535) but lavapipe's maxImageDimension2D is 16384: the draw
-    // refuses it (after opening the GPU, before allocating any image).
+    // One pixel past the device's maxImageDimension2D (lavapipe 16384, NVIDIA 32768) passes
+    // `--size` (1..=65535), and the draw refuses it (after opening the GPU, before allocating any
+    // image). The CLI picks the same device as this context (SHIKKI_DEVICE).
+    let limit = crate::common::validated_gpu().info().max_image_dimension_2d;
+    let width = limit + 1;
+    assert!(
+        width <= 65535,
+        "a device limit of {limit} leaves nothing for --size to pass"
+    );
+    let size = format!("{width}x16");
     let ws = Workspace::new();
     assert_cli_fails(
         &ws,
         &[
             "render",
             "--size",
-            "20000x16",
+            &size,
             "--samples",
             "1",
             "-o",
             "out/r.png",
         ],
-        &["invalid width = 20000", "1..=16384 pixels on this device"],
+        &[
+            &format!("invalid width = {width}"),
+            &format!("1..={limit} pixels on this device"),
+        ],
     );
 }
 
