@@ -1,6 +1,7 @@
 //! Compiles every GLSL shader in `shaders/` to SPIR-V at build time and embeds it.
 //!
-//! Entry shaders are the files ending in `.vert`, `.frag` or `.comp` directly under `shaders/`;
+//! Entry shaders are the files ending in `.vert`, `.frag`, `.comp`, `.rgen`, `.rchit` or `.rmiss`
+//! directly under `shaders/`;
 //! `shaders/common/*.glsl` are only reached through `#include "…"` (resolved relative to the
 //! including file, then to `shaders/common/`, then to `$OUT_DIR`), so the lacquer BRDF is written
 //! once and shared by the fragment shader and the compute evaluator. `$OUT_DIR/interface.glsl` is
@@ -108,6 +109,10 @@ fn entry_shaders(dir: &Path) -> Result<Vec<(PathBuf, shaderc::ShaderKind)>, Stri
             Some("vert") => shaderc::ShaderKind::Vertex,
             Some("frag") => shaderc::ShaderKind::Fragment,
             Some("comp") => shaderc::ShaderKind::Compute,
+            // The ray-tracing pipeline's stages (shade_rt*.rgen, trace_hit.rchit, trace_miss.rmiss).
+            Some("rgen") => shaderc::ShaderKind::RayGeneration,
+            Some("rchit") => shaderc::ShaderKind::ClosestHit,
+            Some("rmiss") => shaderc::ShaderKind::Miss,
             _ => continue,
         };
         found.push((path, kind));

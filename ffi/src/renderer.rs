@@ -109,10 +109,10 @@ pub unsafe extern "C" fn shikki_renderer_create(
 ) -> ShikkiStatus {
     ffi_boundary!({
         check_out(out, "out")?;
-        let no_ray_query = ContextOptions::ray_query_off_by_env();
+        let ray_tracing = ContextOptions::ray_tracing_by_env();
         let context = if options.is_null() {
             ContextOptions {
-                no_ray_query,
+                ray_tracing,
                 ..ContextOptions::default()
             }
         } else {
@@ -123,7 +123,7 @@ pub unsafe extern "C" fn shikki_renderer_create(
             ContextOptions {
                 validation: options.validation,
                 device_name: device.filter(|d| !d.is_empty()).map(str::to_string),
-                no_ray_query,
+                ray_tracing,
                 ..ContextOptions::default()
             }
         };

@@ -28,13 +28,18 @@ layout(set = 0, binding = OBJECT_MATERIAL_BINDING) uniform textureBuffer object_
 #include "light_between.glsl"
 #endif
 
-layout(location = 0) out vec4 out_radiance; // linear radiance, alpha = coverage
+// The pass's outputs. out_radiance: linear radiance, alpha = coverage. out_integral, where rays
+// are traced, the integral image (raster/draw/denoise.rs): rgb the integral's share of
+// out_radiance, alpha the variance of its grey value as the rays estimate it (the clear value −1
+// where no sample is covered: this pass runs only where one is). With it out_radiance is not
+// clamped at 0: the host clamps it (raster/draw/mod.rs).
+// A ray-tracing pipeline's ray generation shader (RAY_TRACING_PIPELINE, shade_rt*.rgen) writes
+// them to storage images instead of colour attachments: shade_rt_pipeline.glsl.
+#ifndef RAY_TRACING_PIPELINE
+layout(location = 0) out vec4 out_radiance;
 #ifdef RAY_TRACING
-// The integral image (raster/draw/denoise.rs): rgb the integral's share of out_radiance, alpha
-// the variance of its grey value as the rays estimate it (the clear value −1 where no sample is
-// covered: this draw runs only where one is). With it out_radiance is not clamped at 0: the host
-// clamps it (raster/draw/mod.rs).
 layout(location = 1) out vec4 out_integral;
+#endif
 #endif
 
 // `normal`: the G-buffer's (w: the triangle, with RAY_TRACING); `key`: the pixel's
@@ -63,8 +68,10 @@ vec3 shade_object(int object, vec3 position, vec4 normal, uint key, out vec4 int
 #endif
 }
 
-void main() {
-    ivec2 texel = ivec2(gl_FragCoord.xy);
+// Pixel `texel` of the target, whose centre is `centre` (gl_FragCoord.xy): the average of its
+// samples (`radiance`) and, with RAY_TRACING, the integral's share and variance (`integral`).
+// False, with nothing written, where no sample is covered.
+bool shade_pixel(ivec2 texel, vec2 centre, out vec4 radiance, out vec4 integral_out) {
     vec4 position[MAX_SAMPLES];
     vec4 normal[MAX_SAMPLES];
     uint covered = 0u;
@@ -84,7 +91,7 @@ void main() {
     int uncovered = SAMPLE_COUNT - bitCount(covered);
     if (uncovered > 0) {
         // The pixel centre in whole-image coordinates, as in background.frag.
-        vec2 pixel = vec2(gl_FragCoord.x, gl_FragCoord.y + frame.strip_offset.y);
+        vec2 pixel = vec2(centre.x, centre.y + frame.strip_offset.y);
         sum += background_radiance(pixel) * float(uncovered);
     }
     // Samples of one triangle hold bit-identical values (interpolated at the pixel centre), so
@@ -119,8 +126,20 @@ void main() {
         integral_sum += integral * vec4(vec3(share), share * share);
         todo &= ~same;
     } while (todo != 0u);
-    out_radiance = sum / float(SAMPLE_COUNT);
+    radiance = sum / float(SAMPLE_COUNT);
+    integral_out = integral_sum;
+    return covered != 0u;
+}
+
+#ifndef RAY_TRACING_PIPELINE
+// A fragment shader: the shading pass's depth test already let through only covered pixels.
+void main() {
+    vec4 radiance;
+    vec4 integral;
+    shade_pixel(ivec2(gl_FragCoord.xy), gl_FragCoord.xy, radiance, integral);
+    out_radiance = radiance;
 #ifdef RAY_TRACING
-    out_integral = integral_sum;
+    out_integral = integral;
 #endif
 }
+#endif

@@ -1,7 +1,8 @@
 // SPEC §6's vis(x, L): whether anything lies between a shaded point and a light, by a ray query
-// against the draw's top-level acceleration structure (SCENE_TLAS_BINDING). Only the ray-traced
-// shading pipelines (shade_rt*.frag, which enable GL_EXT_ray_query) define RAY_TRACING; the
-// others see every light.
+// against the draw's top-level acceleration structure (SCENE_TLAS_BINDING), or by traceRayEXT in
+// the ray-tracing pipeline's shading (shade_rt*.rgen, RAY_TRACING_PIPELINE). Only the ray-traced
+// shading pipelines (shade_rt*.frag, which enable GL_EXT_ray_query, and shade_rt*.rgen) define
+// RAY_TRACING; the others see every light.
 //
 // The CPU twin is `oracle::shadows` (same offset, same ray): keep the two alike.
 
@@ -47,6 +48,33 @@ struct RayHit {
     vec2 barycentrics;
 };
 
+#ifdef RAY_TRACING_PIPELINE
+// The ray-tracing pipeline path: the same two traces through traceRayEXT, answered by
+// trace_hit.rchit and trace_miss.rmiss (ray_payload.glsl).
+#include "ray_payload.glsl"
+layout(location = 0) rayPayloadEXT RayPayload payload;
+
+RayHit trace_nearest(vec3 origin, vec3 direction) {
+    payload.hit = 0;
+    traceRayEXT(scene_tlas, gl_RayFlagsOpaqueEXT, 0xff, RAY_HIT_GROUP_OFFSET, 0, RAY_MISS_INDEX,
+        origin, 0.0, direction, RAY_FAR, 0);
+    RayHit hit;
+    hit.hit = payload.hit != 0;
+    hit.object = hit.hit ? payload.object : 0;
+    hit.triangle = hit.hit ? payload.triangle : 0;
+    hit.barycentrics = hit.hit ? payload.barycentrics : vec2(0.0);
+    return hit;
+}
+
+// A shadow ray skips the closest-hit shader: only the miss shader clears `hit`.
+bool unoccluded(vec3 origin, vec3 direction, float t_max) {
+    payload.hit = 1;
+    traceRayEXT(scene_tlas,
+        gl_RayFlagsTerminateOnFirstHitEXT | gl_RayFlagsOpaqueEXT | gl_RayFlagsSkipClosestHitShaderEXT,
+        0xff, RAY_HIT_GROUP_OFFSET, 0, RAY_MISS_INDEX, origin, 0.0, direction, t_max, 0);
+    return payload.hit == 0;
+}
+#else
 RayHit trace_nearest(vec3 origin, vec3 direction) {
     rayQueryEXT query;
     rayQueryInitializeEXT(query, scene_tlas, gl_RayFlagsOpaqueEXT, 0xff, origin, 0.0, direction,
@@ -76,6 +104,7 @@ bool unoccluded(vec3 origin, vec3 direction, float t_max) {
     }
     return rayQueryGetIntersectionTypeEXT(query, true) == gl_RayQueryCommittedIntersectionNoneEXT;
 }
+#endif
 #endif
 
 // 1 when light `light_vector` (Frame::light_vector: w = 0 directional, 1 point) is seen from

@@ -151,12 +151,19 @@ pub(crate) fn mesa_version(driver_info: &str) -> Option<(u32, u32)> {
     }
 }
 
-/// Ray queries from shaders (`VK_KHR_ray_query` over `VK_KHR_acceleration_structure`), which
-/// light between objects (SPEC §6) needs. Without them shikki renders every object as if alone.
+/// How shaders trace rays against the draw's acceleration structures
+/// (`VK_KHR_acceleration_structure`), which light between objects (SPEC §6) needs: ray queries
+/// from the shading pass's fragment shader (`VK_KHR_ray_query`), or, on a device without them
+/// that has ray-tracing pipelines (`VK_KHR_ray_tracing_pipeline`: NVIDIA's H100 and H200), the
+/// same shading as a ray generation shader (shade_rt*.rgen). Without either shikki renders every
+/// object as if alone.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum RayQuery {
-    /// The extensions and features are present and enabled on the device.
+    /// Ray queries: the extensions and features are present and enabled on the device.
     Enabled,
+    /// A ray-tracing pipeline traces instead: the device has no ray queries, or
+    /// `SHIKKI_RAY_QUERY=pipeline` asked for this path.
+    Pipeline,
     /// Present, but turned off (`SHIKKI_RAY_QUERY=0`, [`ContextOptions`](super::ContextOptions)).
     Disabled,
     /// Not available on this device: what it lacks.
@@ -164,14 +171,23 @@ pub enum RayQuery {
 }
 
 impl RayQuery {
+    /// Rays are traced, by ray queries or by a ray-tracing pipeline.
     pub fn is_enabled(&self) -> bool {
-        *self == RayQuery::Enabled
+        matches!(self, RayQuery::Enabled | RayQuery::Pipeline)
+    }
+
+    /// Rays are traced by a ray-tracing pipeline (shade_rt*.rgen), not by ray queries.
+    pub fn uses_pipeline(&self) -> bool {
+        *self == RayQuery::Pipeline
     }
 
     /// One line for `shikki info`.
     pub fn summary(&self) -> String {
         match self {
             RayQuery::Enabled => "yes".into(),
+            RayQuery::Pipeline => {
+                "traced by a ray-tracing pipeline (VK_KHR_ray_tracing_pipeline)".into()
+            }
             RayQuery::Disabled => "available, turned off (SHIKKI_RAY_QUERY=0)".into(),
             RayQuery::Missing(what) => format!("no ({what})"),
         }
@@ -181,15 +197,16 @@ impl RayQuery {
     /// to install. `None` when ray queries are enabled.
     pub fn warning(&self, device: &str) -> Option<String> {
         match self {
-            RayQuery::Enabled => None,
+            RayQuery::Enabled | RayQuery::Pipeline => None,
             RayQuery::Disabled => Some(format!(
                 "ray queries turned off by SHIKKI_RAY_QUERY=0 on {device}: objects are shaded \
                  without light between them (no shadows or inter-reflections)"
             )),
             RayQuery::Missing(what) => Some(format!(
-                "{device} has no ray queries ({what}): objects are shaded without light between \
+                "{device} has no ray tracing ({what}): objects are shaded without light between \
                  them (no shadows or inter-reflections); install Mesa >= 24.1 lavapipe \
-                 (./scripts/setup does) or a GPU driver with VK_KHR_ray_query"
+                 (./scripts/setup does) or a GPU driver with VK_KHR_ray_query or \
+                 VK_KHR_ray_tracing_pipeline"
             )),
         }
     }
@@ -201,6 +218,28 @@ pub(crate) const RAY_QUERY_EXTENSIONS: [&std::ffi::CStr; 3] = [
     ash::khr::acceleration_structure::NAME,
     ash::khr::ray_query::NAME,
 ];
+
+/// The device extensions the ray-tracing pipeline path needs, in the order they are enabled.
+pub(crate) const RAY_PIPELINE_EXTENSIONS: [&std::ffi::CStr; 3] = [
+    ash::khr::deferred_host_operations::NAME,
+    ash::khr::acceleration_structure::NAME,
+    ash::khr::ray_tracing_pipeline::NAME,
+];
+
+/// Which way of tracing rays a context may use (`SHIKKI_RAY_QUERY`, [`ContextOptions`]).
+///
+/// [`ContextOptions`]: super::ContextOptions
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RayTracingChoice {
+    /// Ray queries where the device has them, else a ray-tracing pipeline where it has one.
+    #[default]
+    Auto,
+    /// The ray-tracing pipeline even where ray queries exist (`SHIKKI_RAY_QUERY=pipeline`): the
+    /// path of NVIDIA's H100/H200, which tests keep covered on lavapipe.
+    Pipeline,
+    /// No ray tracing (`SHIKKI_RAY_QUERY=0`).
+    Off,
+}
 
 impl AdapterInfo {
     /// (major, minor) of the Mesa release in the driver's info string, for Mesa drivers.
@@ -218,7 +257,7 @@ pub(crate) struct ChosenAdapter {
 pub(crate) fn choose_adapter(
     instance: &ash::Instance,
     wanted: Option<&str>,
-    ray_query_allowed: bool,
+    choice: RayTracingChoice,
 ) -> Result<ChosenAdapter, GpuError> {
     // SAFETY: a plain query on a valid instance.
     let devices =
@@ -226,7 +265,7 @@ pub(crate) fn choose_adapter(
     let mut candidates = Vec::new();
     let mut rejected = Vec::new();
     for physical_device in devices {
-        let info = describe(instance, physical_device, ray_query_allowed)?;
+        let info = describe(instance, physical_device, choice)?;
         match suitability(instance, physical_device) {
             Ok(queue_family) => candidates.push(ChosenAdapter {
                 physical_device,
@@ -298,10 +337,12 @@ fn suitability(instance: &ash::Instance, device: vk::PhysicalDevice) -> Result<u
         .ok_or_else(|| "no graphics+compute queue".to_string())
 }
 
-/// What the device lacks of the extensions and features ray queries need; `None` when nothing.
-fn ray_query_lack(
+/// What the device lacks of the extensions and features ray queries (`pipeline` false) or the
+/// ray-tracing pipeline path (`pipeline` true) need; `None` when nothing.
+fn ray_tracing_lack(
     instance: &ash::Instance,
     device: vk::PhysicalDevice,
+    pipeline: bool,
 ) -> Result<Option<String>, GpuError> {
     // SAFETY: plain query on a valid physical device.
     let extensions = unsafe { instance.enumerate_device_extension_properties(device) }
@@ -311,7 +352,11 @@ fn ray_query_lack(
             .iter()
             .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name))
     };
-    let missing: Vec<String> = RAY_QUERY_EXTENSIONS
+    let wanted = match pipeline {
+        true => RAY_PIPELINE_EXTENSIONS,
+        false => RAY_QUERY_EXTENSIONS,
+    };
+    let missing: Vec<String> = wanted
         .iter()
         .filter(|name| !has(name))
         .map(|name| name.to_string_lossy().into_owned())
@@ -322,10 +367,14 @@ fn ray_query_lack(
     let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
     let mut acceleration = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
     let mut ray_query = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+    let mut ray_pipeline = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default();
     let mut features = vk::PhysicalDeviceFeatures2::default()
         .push_next(&mut features12)
-        .push_next(&mut acceleration)
-        .push_next(&mut ray_query);
+        .push_next(&mut acceleration);
+    features = match pipeline {
+        true => features.push_next(&mut ray_pipeline),
+        false => features.push_next(&mut ray_query),
+    };
     // SAFETY: the chained structs live on this stack frame; their extensions are supported.
     unsafe { instance.get_physical_device_features2(device, &mut features) };
     let (geometry_shader, independent_blend) = (
@@ -335,7 +384,10 @@ fn ray_query_lack(
     let lacking: Vec<&str> = [
         (features12.buffer_device_address, "bufferDeviceAddress"),
         (acceleration.acceleration_structure, "accelerationStructure"),
-        (ray_query.ray_query, "rayQuery"),
+        match pipeline {
+            true => (ray_pipeline.ray_tracing_pipeline, "rayTracingPipeline"),
+            false => (ray_query.ray_query, "rayQuery"),
+        },
         // The ray-traced G-buffer pass reads gl_PrimitiveID in its fragment shader.
         (geometry_shader, "geometryShader"),
         // The ray-traced shading pass has a second colour target (the integral image) that its
@@ -352,7 +404,7 @@ fn ray_query_lack(
 fn describe(
     instance: &ash::Instance,
     device: vk::PhysicalDevice,
-    ray_query_allowed: bool,
+    choice: RayTracingChoice,
 ) -> Result<AdapterInfo, GpuError> {
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
     let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
@@ -373,10 +425,15 @@ fn describe(
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     let v = props.api_version;
-    let ray_query = match ray_query_lack(instance, device)? {
-        None if ray_query_allowed => RayQuery::Enabled,
-        None => RayQuery::Disabled,
-        Some(what) => RayQuery::Missing(what),
+    let queries = ray_tracing_lack(instance, device, false)?;
+    let pipeline = ray_tracing_lack(instance, device, true)?;
+    let ray_query = match (choice, queries, pipeline) {
+        (RayTracingChoice::Auto, None, _) => RayQuery::Enabled,
+        (RayTracingChoice::Auto | RayTracingChoice::Pipeline, _, None) => RayQuery::Pipeline,
+        (RayTracingChoice::Off, None, _) | (RayTracingChoice::Off, _, None) => RayQuery::Disabled,
+        // Asked for the pipeline on a device with ray queries only: say what it lacks.
+        (RayTracingChoice::Pipeline, _, Some(what)) => RayQuery::Missing(what),
+        (_, Some(what), Some(_)) => RayQuery::Missing(what),
     };
     let quirks = Quirks::of_driver(driver.driver_id, &driver_info);
     Ok(AdapterInfo {

@@ -37,6 +37,11 @@ impl BufferUsage {
         vk::BufferUsageFlags::STORAGE_BUFFER.as_raw()
             | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS.as_raw(),
     ));
+    /// A ray-tracing pipeline's shader binding table (gpu/ray_pipeline.rs), read by address.
+    pub(crate) const SHADER_BINDING_TABLE: Self = Self(vk::BufferUsageFlags::from_raw(
+        vk::BufferUsageFlags::SHADER_BINDING_TABLE_KHR.as_raw()
+            | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS.as_raw(),
+    ));
     pub const TRANSFER_SRC: Self = Self(vk::BufferUsageFlags::TRANSFER_SRC);
     pub const TRANSFER_DST: Self = Self(vk::BufferUsageFlags::TRANSFER_DST);
 }

@@ -9,6 +9,7 @@ use super::conv::{self, Access, Layout};
 use super::image::Image;
 use super::pipeline::{ComputePipeline, DescriptorSet, GraphicsPipeline};
 use super::query::TimestampPool;
+use super::ray_pipeline::RayTracingPipeline;
 use ash::vk;
 
 /// A use of an image: the access and the layout it must be in.
@@ -302,6 +303,54 @@ impl Recorder<'_> {
         unsafe {
             self.device
                 .cmd_push_constants(self.cmd, layout.raw, layout.stages, 0, &bytes[..len])
+        };
+    }
+
+    pub fn bind_ray_tracing(&mut self, pipeline: &RayTracingPipeline, set: &DescriptorSet) {
+        // SAFETY: recording; pipeline and set are live and compatible.
+        unsafe {
+            self.device.cmd_bind_pipeline(
+                self.cmd,
+                vk::PipelineBindPoint::RAY_TRACING_KHR,
+                pipeline.raw,
+            );
+            self.device.cmd_bind_descriptor_sets(
+                self.cmd,
+                vk::PipelineBindPoint::RAY_TRACING_KHR,
+                pipeline.layout.raw,
+                0,
+                std::slice::from_ref(&set.raw),
+                &[],
+            );
+        }
+    }
+
+    /// Push constants for a ray-tracing pipeline; `bytes` must fit its declared block.
+    pub fn push_ray_tracing_constants(&mut self, pipeline: &RayTracingPipeline, bytes: &[u8]) {
+        let layout = &pipeline.layout;
+        let len = bytes.len().min(layout.push_constant_size as usize);
+        if len == 0 {
+            return;
+        }
+        // SAFETY: recording; the range is within the layout's push constant block.
+        unsafe {
+            self.device
+                .cmd_push_constants(self.cmd, layout.raw, layout.stages, 0, &bytes[..len])
+        };
+    }
+
+    /// Launches `pipeline`'s ray generation shader `width` × `height` times (it is bound).
+    pub fn trace_rays(&mut self, pipeline: &RayTracingPipeline, width: u32, height: u32) {
+        let Some(functions) = pipeline.layout.shared.ray_pipeline.as_ref() else {
+            // A RayTracingPipeline exists only on a device with the functions.
+            return;
+        };
+        let [raygen, miss, hit, callable] = &pipeline.regions;
+        // SAFETY: recording with the pipeline bound; its table's regions are live with it.
+        unsafe {
+            functions
+                .functions
+                .cmd_trace_rays(self.cmd, raygen, miss, hit, callable, width, height, 1)
         };
     }
 

@@ -1,7 +1,7 @@
 //! [`GpuContext`]: the device, one queue, one command pool. The renderer creates every GPU object
 //! through it and submits work with [`GpuContext::submit_and_wait`].
 
-use super::adapter::AdapterInfo;
+use super::adapter::{AdapterInfo, RayTracingChoice};
 use super::buffer::{Buffer, BufferDesc};
 use super::command::Recorder;
 use super::debug::ValidationLog;
@@ -13,6 +13,7 @@ use super::pipeline::{
     PipelineLayout, Resource,
 };
 use super::query::TimestampPool;
+use super::ray_pipeline::{RayTracingPipeline, RayTracingPipelineDesc};
 use ash::vk;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -34,18 +35,25 @@ pub struct ContextOptions {
     /// A file holding the driver's pipeline cache, read at start and written by
     /// [`GpuContext::save_pipeline_cache`]: the second run starts without compiling shaders.
     pub pipeline_cache: Option<PathBuf>,
-    /// Leave ray queries off even where the device has them (`SHIKKI_RAY_QUERY=0`): the path of
-    /// a device without them, which tests keep covered.
-    pub no_ray_query: bool,
+    /// How rays are traced: ray queries where the device has them, else a ray-tracing pipeline
+    /// (`Auto`); the ray-tracing pipeline even where ray queries exist (`SHIKKI_RAY_QUERY=pipeline`);
+    /// or not at all (`SHIKKI_RAY_QUERY=0`): the paths of devices without ray queries, which
+    /// tests keep covered.
+    pub ray_tracing: RayTracingChoice,
 }
 
 impl ContextOptions {
     /// `SHIKKI_VALIDATION=1` turns validation on (`SHIKKI_SYNC_VALIDATION=1` adds its
     /// synchronisation checks); `SHIKKI_DEVICE=<substring>` picks the device;
-    /// `SHIKKI_RAY_QUERY=0` leaves ray queries off.
-    /// `SHIKKI_RAY_QUERY=0`: every way of opening a device (CLI, C API, tests) reads it here.
-    pub fn ray_query_off_by_env() -> bool {
-        std::env::var("SHIKKI_RAY_QUERY").is_ok_and(|v| v == "0")
+    /// `SHIKKI_RAY_QUERY=0` leaves ray tracing off, `SHIKKI_RAY_QUERY=pipeline` traces by a
+    /// ray-tracing pipeline even where ray queries exist.
+    /// Every way of opening a device (CLI, C API, tests) reads `SHIKKI_RAY_QUERY` here.
+    pub fn ray_tracing_by_env() -> RayTracingChoice {
+        match std::env::var("SHIKKI_RAY_QUERY").as_deref() {
+            Ok("0") => RayTracingChoice::Off,
+            Ok("pipeline") => RayTracingChoice::Pipeline,
+            _ => RayTracingChoice::Auto,
+        }
     }
 
     pub fn from_env() -> Self {
@@ -57,7 +65,7 @@ impl ContextOptions {
             synchronization_validation: std::env::var("SHIKKI_SYNC_VALIDATION")
                 .is_ok_and(|v| v == "1"),
             pipeline_cache: default_pipeline_cache(),
-            no_ray_query: Self::ray_query_off_by_env(),
+            ray_tracing: Self::ray_tracing_by_env(),
         }
     }
 }
@@ -118,7 +126,7 @@ impl GpuContext {
             options.validation,
             options.synchronization_validation,
             options.device_name.as_deref(),
-            !options.no_ray_query,
+            options.ray_tracing,
             |info| read_pipeline_cache(options.pipeline_cache.as_deref(), info),
         )?);
         // SAFETY: the queue family was chosen with one queue; index 0 exists.
@@ -266,6 +274,14 @@ impl GpuContext {
         desc: &GraphicsPipelineDesc<'_>,
     ) -> Result<GraphicsPipeline, GpuError> {
         GraphicsPipeline::new(&self.shared, desc)
+    }
+
+    /// A ray-tracing pipeline (the device traces rays by one: `RayQuery::Pipeline`).
+    pub fn create_ray_tracing_pipeline(
+        &self,
+        desc: &RayTracingPipelineDesc<'_>,
+    ) -> Result<RayTracingPipeline, GpuError> {
+        RayTracingPipeline::new(&self.shared, desc)
     }
 
     pub fn create_descriptor_set(

@@ -62,6 +62,14 @@ pub enum Access {
     AccelerationStructureBuildRead,
     /// Ray queries in the fragment or compute stage.
     RayQuery,
+    /// A ray-tracing pipeline's shaders reading images, uniforms or storage (including buffers
+    /// by device address), or tracing against acceleration structures.
+    RayTracingShaderRead,
+    /// ... writing storage images or buffers.
+    RayTracingShaderWrite,
+    /// Reads in the fragment stage and a ray-tracing pipeline's shaders: the G-buffer, which the
+    /// coverage draw and shade_rt*.rgen both read.
+    FragmentAndRayTracingShaderRead,
 }
 
 pub(crate) fn stage_access(access: Access) -> (vk::PipelineStageFlags2, vk::AccessFlags2) {
@@ -106,6 +114,18 @@ pub(crate) fn stage_access(access: Access) -> (vk::PipelineStageFlags2, vk::Acce
         Access::RayQuery => (
             S::FRAGMENT_SHADER | S::COMPUTE_SHADER,
             A::ACCELERATION_STRUCTURE_READ_KHR,
+        ),
+        Access::RayTracingShaderRead => (
+            S::RAY_TRACING_SHADER_KHR,
+            A::SHADER_SAMPLED_READ
+                | A::SHADER_STORAGE_READ
+                | A::UNIFORM_READ
+                | A::ACCELERATION_STRUCTURE_READ_KHR,
+        ),
+        Access::RayTracingShaderWrite => (S::RAY_TRACING_SHADER_KHR, A::SHADER_STORAGE_WRITE),
+        Access::FragmentAndRayTracingShaderRead => (
+            S::FRAGMENT_SHADER | S::RAY_TRACING_SHADER_KHR,
+            A::SHADER_SAMPLED_READ | A::SHADER_STORAGE_READ | A::UNIFORM_READ,
         ),
     }
 }

@@ -2,7 +2,10 @@
 //! allocator. Resources hold an `Arc<DeviceShared>`, so the device outlives every buffer, image and
 //! pipeline made from it, and `Drop` tears down in reverse creation order.
 
-use super::adapter::{choose_adapter, AdapterInfo, ChosenAdapter, RAY_QUERY_EXTENSIONS};
+use super::adapter::{
+    choose_adapter, AdapterInfo, ChosenAdapter, RayTracingChoice, RAY_PIPELINE_EXTENSIONS,
+    RAY_QUERY_EXTENSIONS,
+};
 use super::debug::ValidationLog;
 use super::error::{GpuError, VkResultExt};
 use super::instance::{create_instance, InstanceParts};
@@ -19,8 +22,11 @@ pub(crate) struct DeviceShared {
     pub validation: bool,
     /// Handed to every pipeline creation; null when there is none.
     pub pipeline_cache: vk::PipelineCache,
-    /// The acceleration-structure functions, on a device with ray queries enabled.
+    /// The acceleration-structure functions, on a device that traces rays.
     pub acceleration: Option<ash::khr::acceleration_structure::Device>,
+    /// The ray-tracing pipeline functions and the device's shader-group handle layout, on a
+    /// device that traces rays by a ray-tracing pipeline (`RayQuery::Pipeline`).
+    pub ray_pipeline: Option<RayPipelineFunctions>,
     allocator: ManuallyDrop<Mutex<Allocator>>,
     instance: InstanceParts,
 }
@@ -30,13 +36,13 @@ impl DeviceShared {
         validation: bool,
         synchronization_validation: bool,
         device_name: Option<&str>,
-        ray_query_allowed: bool,
+        ray_tracing: RayTracingChoice,
         cache_data: impl FnOnce(&AdapterInfo) -> Vec<u8>,
     ) -> Result<Self, GpuError> {
         let log = ValidationLog::default();
         let instance = create_instance(validation, synchronization_validation, &log)?;
         // `log` stays alive here until the instance (and its messenger) is gone on every path.
-        match create_device(&instance, device_name, ray_query_allowed) {
+        match create_device(&instance, device_name, ray_tracing) {
             Ok((device, adapter, allocator)) => {
                 let initial = cache_data(&adapter.info);
                 let info = vk::PipelineCacheCreateInfo::default().initial_data(&initial);
@@ -57,6 +63,9 @@ impl DeviceShared {
                 let acceleration = adapter.info.ray_query.is_enabled().then(|| {
                     ash::khr::acceleration_structure::Device::new(&instance.instance, &device)
                 });
+                let ray_pipeline = adapter.info.ray_query.uses_pipeline().then(|| {
+                    RayPipelineFunctions::new(&instance.instance, &device, adapter.physical_device)
+                });
                 Ok(DeviceShared {
                     device,
                     queue_family: adapter.queue_family,
@@ -65,6 +74,7 @@ impl DeviceShared {
                     validation,
                     pipeline_cache,
                     acceleration,
+                    ray_pipeline,
                     allocator: ManuallyDrop::new(Mutex::new(allocator)),
                     instance,
                 })
@@ -110,10 +120,12 @@ impl Drop for DeviceShared {
 fn create_device(
     instance: &InstanceParts,
     device_name: Option<&str>,
-    ray_query_allowed: bool,
+    ray_tracing: RayTracingChoice,
 ) -> Result<(ash::Device, ChosenAdapter, Allocator), GpuError> {
-    let adapter = choose_adapter(&instance.instance, device_name, ray_query_allowed)?;
+    let adapter = choose_adapter(&instance.instance, device_name, ray_tracing)?;
+    // Rays traced at all (below: the features both paths share) and by a ray-tracing pipeline.
     let ray_query = adapter.info.ray_query.is_enabled();
+    let ray_pipeline = adapter.info.ray_query.uses_pipeline();
     let priorities = [1.0f32];
     let queue_info = vk::DeviceQueueCreateInfo::default()
         .queue_family_index(adapter.queue_family)
@@ -134,10 +146,12 @@ fn create_device(
     let mut acceleration =
         vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
     let mut ray_query_features = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
-    let extensions: Vec<*const std::ffi::c_char> = if ray_query {
-        RAY_QUERY_EXTENSIONS.iter().map(|e| e.as_ptr()).collect()
-    } else {
-        Vec::new()
+    let mut ray_pipeline_features =
+        vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default().ray_tracing_pipeline(true);
+    let extensions: Vec<*const std::ffi::c_char> = match (ray_query, ray_pipeline) {
+        (true, false) => RAY_QUERY_EXTENSIONS.iter().map(|e| e.as_ptr()).collect(),
+        (true, true) => RAY_PIPELINE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect(),
+        (false, _) => Vec::new(),
     };
     let mut create_info = vk::DeviceCreateInfo::default()
         .queue_create_infos(std::slice::from_ref(&queue_info))
@@ -147,8 +161,11 @@ fn create_device(
     if ray_query {
         create_info = create_info
             .push_next(&mut features12)
-            .push_next(&mut acceleration)
-            .push_next(&mut ray_query_features);
+            .push_next(&mut acceleration);
+        create_info = match ray_pipeline {
+            true => create_info.push_next(&mut ray_pipeline_features),
+            false => create_info.push_next(&mut ray_query_features),
+        };
     }
     // SAFETY: the physical device comes from this instance; create_info lives until return.
     let device = unsafe {
@@ -187,4 +204,35 @@ fn destroy_instance(parts: &InstanceParts) {
     // SAFETY: all children of the instance are destroyed by now.
     unsafe { parts.instance.destroy_instance(None) };
     let _ = &parts.entry;
+}
+
+/// The ray-tracing pipeline functions and the layout of the device's shader-group handles, which
+/// a shader binding table follows (gpu/ray_pipeline.rs).
+pub(crate) struct RayPipelineFunctions {
+    pub functions: ash::khr::ray_tracing_pipeline::Device,
+    /// Bytes of one shader group's handle.
+    pub handle_size: u32,
+    /// A record's stride is a multiple of this.
+    pub handle_alignment: u32,
+    /// Each table region starts at a multiple of this.
+    pub base_alignment: u32,
+}
+
+impl RayPipelineFunctions {
+    fn new(
+        instance: &ash::Instance,
+        device: &ash::Device,
+        physical_device: vk::PhysicalDevice,
+    ) -> Self {
+        let mut properties = vk::PhysicalDeviceRayTracingPipelinePropertiesKHR::default();
+        let mut properties2 = vk::PhysicalDeviceProperties2::default().push_next(&mut properties);
+        // SAFETY: plain query on a valid physical device; the chained struct lives on this frame.
+        unsafe { instance.get_physical_device_properties2(physical_device, &mut properties2) };
+        RayPipelineFunctions {
+            functions: ash::khr::ray_tracing_pipeline::Device::new(instance, device),
+            handle_size: properties.shader_group_handle_size,
+            handle_alignment: properties.shader_group_handle_alignment.max(1),
+            base_alignment: properties.shader_group_base_alignment.max(1),
+        }
+    }
 }

@@ -35,10 +35,11 @@ mod image;
 mod instance;
 mod pipeline;
 mod query;
+mod ray_pipeline;
 pub mod shaders;
 
 pub use accel::{AccelerationStructure, Instance, TriangleGeometry};
-pub use adapter::{AdapterInfo, Quirks, RayQuery};
+pub use adapter::{AdapterInfo, Quirks, RayQuery, RayTracingChoice};
 pub use buffer::{Buffer, BufferDesc, BufferUsage, MemoryUse};
 pub use command::{ImageUse, Recorder, RenderTargets};
 pub use context::{ContextOptions, GpuContext};
@@ -51,3 +52,4 @@ pub use pipeline::{
     PipelineLayout, Resource, VertexAttribute,
 };
 pub use query::TimestampPool;
+pub use ray_pipeline::{RayTracingPipeline, RayTracingPipelineDesc};

@@ -65,11 +65,11 @@ pub struct PipelineLayout {
     pub(crate) stages: vk::ShaderStageFlags,
     pub(crate) push_constant_size: u32,
     bindings: Vec<Binding>,
-    shared: Arc<DeviceShared>,
+    pub(super) shared: Arc<DeviceShared>,
 }
 
 impl PipelineLayout {
-    fn new(
+    pub(super) fn new(
         shared: &Arc<DeviceShared>,
         bindings: &[Binding],
         stages: vk::ShaderStageFlags,
@@ -135,13 +135,17 @@ impl Drop for PipelineLayout {
 }
 
 /// A shader module that lives only while a pipeline is being created.
-struct ShaderModule<'a> {
-    raw: vk::ShaderModule,
+pub(super) struct ShaderModule<'a> {
+    pub(super) raw: vk::ShaderModule,
     device: &'a ash::Device,
 }
 
 impl<'a> ShaderModule<'a> {
-    fn new(device: &'a ash::Device, name: &'static str, spirv: &[u8]) -> Result<Self, GpuError> {
+    pub(super) fn new(
+        device: &'a ash::Device,
+        name: &'static str,
+        spirv: &[u8],
+    ) -> Result<Self, GpuError> {
         let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv)).map_err(|e| {
             GpuError::Shader {
                 name,
@@ -165,7 +169,7 @@ impl Drop for ShaderModule<'_> {
 
 /// Map entries for `count` 32-bit specialization constants packed in order: entry i sets
 /// `constant_id = i`.
-fn specialization_entries(count: usize) -> Vec<vk::SpecializationMapEntry> {
+pub(super) fn specialization_entries(count: usize) -> Vec<vk::SpecializationMapEntry> {
     (0..count)
         .map(|i| vk::SpecializationMapEntry {
             constant_id: i as u32,

@@ -15,7 +15,7 @@ pub fn validated_gpu() -> GpuContext {
         synchronization_validation: true,
         pipeline_cache: None,
         // `SHIKKI_RAY_QUERY=0` runs the suite as on a device without ray queries.
-        no_ray_query: ContextOptions::ray_query_off_by_env(),
+        ray_tracing: ContextOptions::ray_tracing_by_env(),
     };
     match GpuContext::new(&options) {
         Ok(gpu) => gpu,

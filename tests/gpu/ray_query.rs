@@ -4,7 +4,7 @@
 
 use crate::common;
 
-use shikki::gpu::{ContextOptions, GpuContext, RayQuery};
+use shikki::gpu::{ContextOptions, GpuContext, RayQuery, RayTracingChoice};
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -34,7 +34,10 @@ fn context(no_ray_query: bool) -> GpuContext {
         validation: true,
         synchronization_validation: true,
         device_name: std::env::var("SHIKKI_DEVICE").ok(),
-        no_ray_query,
+        ray_tracing: match no_ray_query {
+            true => RayTracingChoice::Off,
+            false => ContextOptions::ray_tracing_by_env(),
+        },
         ..ContextOptions::default()
     })
     .expect("a validated Vulkan context")
@@ -57,12 +60,13 @@ fn device_reports_ray_queries_and_the_option_turns_them_off() {
     common::assert_no_validation_messages(&off);
     match lavapipe_mesa_version(on.info()) {
         Some(version) if version >= (24, 1) => {
-            assert_eq!(
-                on.info().ray_query,
-                RayQuery::Enabled,
-                "{}",
-                on.info().driver_info
-            );
+            // Mesa 25's lavapipe has ray-tracing pipelines too: `SHIKKI_RAY_QUERY=pipeline`
+            // takes NVIDIA's H100/H200 path.
+            let expected = match ContextOptions::ray_tracing_by_env() {
+                RayTracingChoice::Pipeline => RayQuery::Pipeline,
+                _ => RayQuery::Enabled,
+            };
+            assert_eq!(on.info().ray_query, expected, "{}", on.info().driver_info);
             assert_eq!(off.info().ray_query, RayQuery::Disabled);
         }
         Some(_) => assert!(matches!(on.info().ray_query, RayQuery::Missing(_))),

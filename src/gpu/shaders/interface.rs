@@ -76,6 +76,11 @@ shader_interface! {
         SCENE_TLAS_BINDING: u32 = 11;
         /// ... and per object its mesh's vertex and index buffer addresses (ray_surface.glsl).
         OBJECT_GEOMETRY_BINDING: u32 = 12;
+        /// The ray-tracing pipeline's shading (shade_rt*.rgen, where the device has no ray
+        /// queries): the image and the integral image it writes as storage images, where the
+        /// fragment shading pass writes colour attachments.
+        SHADED_IMAGE_BINDING: u32 = 13;
+        SHADED_INTEGRAL_BINDING: u32 = 14;
 
         /// A prefilter step's set 0: the cube (or, for step 1, the equirect) it reads as a texel
         /// buffer, the cube it writes, and step 1's near-edge list (`NearHeader`, then texels).
@@ -284,6 +289,13 @@ shader_interface! {
             beta: float,
             /// `params::LOBE_CUTOFF`: texels with q > cutoff·β² are skipped.
             cutoff: float,
+        }
+
+        /// The ray-tracing pipeline's shading (shade_rt*.rgen): the target texel of launch (0, 0),
+        /// the corner of the strip's shaded rectangle.
+        struct TraceOrigin: push_constant {
+            origin_x: int,
+            origin_y: int,
         }
 
         /// Step 4's push constants (irradiance.comp).

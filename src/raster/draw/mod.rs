@@ -54,7 +54,7 @@ use crate::environment::{CubeImage, EnvironmentModel, PrefilteredEnvironment};
 use crate::gpu::shaders::interface::Frame;
 use crate::gpu::{
     AccelerationStructure, Buffer, BufferUsage, DescriptorSet, GpuContext, GraphicsPipeline,
-    Instance, Sampler, TimestampPool,
+    Instance, RayTracingPipeline, Sampler, TimestampPool,
 };
 use crate::output::HdrImage;
 use crate::raster::camera::PixelRect;
@@ -63,12 +63,13 @@ use denoise::{denoise, denoise_params, denoise_sigma, DenoisePass};
 use frame::{fresnel_knots, DrawBuffers};
 use passes::{
     record_deferred, record_forward, strips, timings_from, DeferredPasses, DrawnMesh,
-    ForwardPasses, TIMESTAMPS,
+    ForwardPasses, Shading, TIMESTAMPS,
 };
 use pipelines::{
     fresnel_on_pow2_grid, graphics_set, shade_set, PipelineKey, PipelineKind, PipelineTable,
     ShadeVariant,
 };
+use std::sync::Arc;
 use targets::{traced_strip_rows, TargetCache};
 use types::validate;
 
@@ -400,16 +401,16 @@ fn draw_deferred(
         gpu,
         inputs.key(PipelineKind::Coverage(environment_background, ray_traced)),
     )?;
-    let shade = pipelines.get(
-        gpu,
-        inputs.key(PipelineKind::Shade(ShadeVariant {
-            environment_background,
-            fresnel_pow2_grid,
-            environment_model: scene.environment_model,
-            ray_traced,
-            shadows: traced.is_some_and(|rt| rt.shadows),
-        })),
-    )?;
+    let shade_key = inputs.key(PipelineKind::Shade(ShadeVariant {
+        environment_background,
+        fresnel_pow2_grid,
+        environment_model: scene.environment_model,
+        ray_traced,
+        shadows: traced.is_some_and(|rt| rt.shadows),
+    }));
+    // A device without ray queries shades a ray-traced draw in a ray-tracing pipeline
+    // (shade_rt*.rgen); its fragment shaders cannot trace.
+    let ray_pipeline = ray_traced && gpu.info().ray_query.uses_pipeline();
     // The draw's top-level structure over the objects' meshes (each mesh's bottom level is
     // built once and kept with it).
     let structures = match traced {
@@ -434,23 +435,46 @@ fn draw_deferred(
         targets.integral(gpu)?;
     }
     let gbuffer_images = (&targets.attachments.position, &targets.attachments.normal);
-    let shade_set = shade_set(
+    let traced_resources = structures
+        .as_ref()
+        .map(|(scene, geometry)| (scene, geometry));
+    // coverage.frag's set, which shade*.frag shares (the same bindings).
+    let coverage_set = shade_set(
         gpu,
-        &shade,
+        coverage.layout(),
         buffers,
         (inputs.environment, layer_texels),
         inputs.sampler,
         gbuffer_images,
-        structures
-            .as_ref()
-            .map(|(scene, geometry)| (scene, geometry)),
+        traced_resources,
+        None,
     )?;
+    let shade = match ray_pipeline {
+        true => {
+            let pipeline = pipelines.ray_pipeline(gpu, shade_key)?;
+            // The images it writes: the shading pass's outputs (a ray-traced draw has both).
+            let output = &targets.attachments.output;
+            let integral = targets.attachments.integral.as_ref();
+            let set = shade_set(
+                gpu,
+                pipeline.layout(),
+                buffers,
+                (inputs.environment, layer_texels),
+                inputs.sampler,
+                gbuffer_images,
+                traced_resources,
+                Some((output, integral.map_or(output, |i| &i.image))),
+            )?;
+            ShadePipeline::Ray(pipeline, set)
+        }
+        false => ShadePipeline::Fragment(pipelines.get(gpu, shade_key)?),
+    };
     let passes = DeferredPasses {
         gbuffer: &gbuffer,
         objects: &objects,
         coverage: &coverage,
-        shade: &shade,
-        shade_set: &shade_set,
+        shade: shade.shading(),
+        shade_set: &coverage_set,
         shaded: screen_bounds(inputs),
         // The environment background is drawn by the coverage pass.
         coverage_everywhere: environment_background,
@@ -505,6 +529,22 @@ fn draw_deferred(
         integral: integral.map(|b| read_back(b, settings)).transpose()?,
         timings,
     })
+}
+
+/// The shading pass's pipeline of one draw ([`Shading`] borrows it).
+enum ShadePipeline {
+    Fragment(Arc<GraphicsPipeline>),
+    /// With its set: the shading pass's and the two images it writes.
+    Ray(Arc<RayTracingPipeline>, DescriptorSet),
+}
+
+impl ShadePipeline {
+    fn shading(&self) -> Shading<'_> {
+        match self {
+            ShadePipeline::Fragment(pipeline) => Shading::Fragment(pipeline),
+            ShadePipeline::Ray(pipeline, set) => Shading::RayPipeline(pipeline, set),
+        }
+    }
 }
 
 /// The forward draw (the benchmark's trivial shader): per strip, the background and the meshes

@@ -1,7 +1,8 @@
 //! The passes of one strip of a draw, one function each, recorded into one submit:
 //!
 //! - the lacquer draw (deferred): barriers → [`gbuffer_pass`] → [`shading_pass`] (its
-//!   [`coverage_draw`], then its [`shade_draw`]) → [`copy_out`] (of the integral image too where
+//!   [`coverage_draw`], then its [`shade_draw`], or on a device that traces rays by a
+//!   ray-tracing pipeline its [`trace_pass`]) → [`copy_out`] (of the integral image too where
 //!   rays are traced);
 //! - the forward draw (the benchmark's trivial shader): barriers → [`forward_pass`] (background,
 //!   meshes, MSAA resolve) → [`copy_out`];
@@ -11,9 +12,10 @@
 use super::gpu_mesh::GpuMesh;
 use super::targets::{Deferred, DrawTargets, Forward, IntegralTarget};
 use super::types::DrawTimings;
+use crate::gpu::shaders::interface::TraceOrigin;
 use crate::gpu::{
-    Access, Buffer, DescriptorSet, GpuContext, GraphicsPipeline, Image, ImageUse, Layout, Recorder,
-    RenderTargets, TimestampPool,
+    Access, Buffer, DescriptorSet, GpuContext, GraphicsPipeline, Image, ImageUse, Layout,
+    RayTracingPipeline, Recorder, RenderTargets, TimestampPool,
 };
 use crate::raster::camera::PixelRect;
 use crate::Result;
@@ -51,9 +53,9 @@ pub(crate) type DrawnMesh<'a> = (&'a GpuMesh, &'a DescriptorSet);
 pub(crate) struct DeferredPasses<'a> {
     pub gbuffer: &'a GraphicsPipeline,
     pub objects: &'a [DrawnMesh<'a>],
-    /// coverage.frag and shade.frag, sharing one descriptor set.
+    /// coverage.frag and the shading (shade.frag, sharing its descriptor set, or shade_rt*.rgen).
     pub coverage: &'a GraphicsPipeline,
-    pub shade: &'a GraphicsPipeline,
+    pub shade: Shading<'a>,
     pub shade_set: &'a DescriptorSet,
     /// Image pixels that may be covered (the meshes' screen bounds): the shading pass touches
     /// only these, the rest keep the clear colour.
@@ -65,6 +67,38 @@ pub(crate) struct DeferredPasses<'a> {
     /// The shading pass traces rays: its top-level structure was built by an earlier submit,
     /// and it writes the integral image too (the targets hold one).
     pub ray_traced: bool,
+}
+
+/// How the shading pass shades the covered pixels after its coverage draw.
+pub(crate) enum Shading<'a> {
+    /// shade*.frag behind the coverage draw's early depth test, with ray queries if it traces.
+    Fragment(&'a GraphicsPipeline),
+    /// shade_rt*.rgen, one launch per pixel of the shaded rectangle, writing the image and the
+    /// integral image as storage images: a device that traces rays by a ray-tracing pipeline
+    /// (`RayQuery::Pipeline`; its fragment shaders cannot trace). Its set adds those two images.
+    RayPipeline(&'a RayTracingPipeline, &'a DescriptorSet),
+}
+
+impl DeferredPasses<'_> {
+    fn ray_pipeline(&self) -> bool {
+        matches!(self.shade, Shading::RayPipeline(..))
+    }
+
+    /// The shading pass's reads of the G-buffer.
+    fn gbuffer_read(&self) -> Access {
+        match self.ray_pipeline() {
+            true => Access::FragmentAndRayTracingShaderRead,
+            false => Access::GraphicsShaderRead,
+        }
+    }
+
+    /// The last use of the shading pass's outputs before the copy-out.
+    fn shaded_use(&self) -> ImageUse {
+        match self.ray_pipeline() {
+            true => ImageUse::new(Access::RayTracingShaderWrite, Layout::General),
+            false => COLOR_ATTACHMENT,
+        }
+    }
 }
 
 /// The integral image's value where no object covers the pixel: no integral, and a variance of
@@ -83,7 +117,6 @@ const COLOR_ATTACHMENT: ImageUse =
     ImageUse::new(Access::ColorAttachmentWrite, Layout::ColorAttachment);
 const DEPTH_ATTACHMENT: ImageUse =
     ImageUse::new(Access::DepthAttachmentWrite, Layout::DepthAttachment);
-const SHADER_READ: ImageUse = ImageUse::new(Access::GraphicsShaderRead, Layout::ShaderRead);
 
 fn discard(access: Access) -> ImageUse {
     ImageUse::new(access, Layout::Undefined)
@@ -100,18 +133,38 @@ pub(crate) fn record_deferred(
     gpu.submit_and_wait(|rec| {
         mark(rec, stamps, 0);
         deferred_barriers(rec, targets, passes);
-        if passes.ray_traced {
+        match (passes.ray_traced, passes.ray_pipeline()) {
             // The acceleration-structure builds (earlier submits) before the shading pass's
             // ray queries.
-            rec.memory_barrier(Access::AccelerationStructureBuild, Access::RayQuery);
+            (true, false) => {
+                rec.memory_barrier(Access::AccelerationStructureBuild, Access::RayQuery)
+            }
+            (true, true) => {
+                // ... or before its ray-tracing pipeline; which also reads what earlier submits'
+                // copies and compute steps wrote (meshes by address, the environment), whose
+                // barriers named the fragment stage.
+                rec.memory_barrier(
+                    Access::AccelerationStructureBuild,
+                    Access::RayTracingShaderRead,
+                );
+                rec.memory_barrier(Access::TransferWrite, Access::RayTracingShaderRead);
+                rec.memory_barrier(Access::ComputeShaderWrite, Access::RayTracingShaderRead);
+            }
+            (false, _) => {}
         }
         mark(rec, stamps, 1);
         gbuffer_pass(rec, targets, passes, strip);
         shading_pass(rec, targets, passes, strip);
         mark(rec, stamps, 2);
-        copy_out(rec, &targets.attachments.output, &targets.readback, strip);
+        let shaded = passes.shaded_use();
+        copy_out(
+            rec,
+            (&targets.attachments.output, shaded),
+            &targets.readback,
+            strip,
+        );
         if let Some(integral) = integral_of(targets, passes) {
-            copy_out(rec, &integral.image, &integral.readback, strip);
+            copy_out(rec, (&integral.image, shaded), &integral.readback, strip);
         }
         mark(rec, stamps, 3);
         Ok(())
@@ -135,7 +188,7 @@ pub(crate) fn record_forward(
         mark(rec, stamps, 2);
         let output = targets.attachments.resolve.as_ref();
         let output = output.unwrap_or(&targets.attachments.color);
-        copy_out(rec, output, &targets.readback, strip);
+        copy_out(rec, (output, COLOR_ATTACHMENT), &targets.readback, strip);
         mark(rec, stamps, 3);
         Ok(())
     })?;
@@ -192,7 +245,7 @@ fn deferred_barriers(
 ) {
     let (gbuffer_before, depth_before, output_before) = if targets.used {
         (
-            Access::GraphicsShaderRead,
+            passes.gbuffer_read(),
             Access::DepthAttachmentWrite,
             Access::TransferRead,
         )
@@ -244,8 +297,9 @@ fn gbuffer_pass(
     set_strip_viewport(rec, strip);
     draw_objects(rec, passes.gbuffer, passes.objects);
     rec.end_rendering();
+    let read = ImageUse::new(passes.gbuffer_read(), Layout::ShaderRead);
     for image in gbuffer {
-        rec.image_barrier(image, COLOR_ATTACHMENT, SHADER_READ);
+        rec.image_barrier(image, COLOR_ATTACHMENT, read);
     }
 }
 
@@ -279,14 +333,61 @@ fn shading_pass(
     if passes.coverage_everywhere {
         coverage_draw(rec, passes);
     }
-    if let Some((x, y, width, height)) = shaded_in_strip(passes.shaded, strip) {
+    let shaded = shaded_in_strip(passes.shaded, strip);
+    if let Some((x, y, width, height)) = shaded {
         rec.set_scissor(x, y, width, height);
         if !passes.coverage_everywhere {
             coverage_draw(rec, passes);
         }
-        shade_draw(rec, passes);
+        if let Shading::Fragment(shade) = passes.shade {
+            shade_draw(rec, shade, passes.shade_set);
+        }
     }
     rec.end_rendering();
+    if let Shading::RayPipeline(pipeline, set) = passes.shade {
+        trace_pass(
+            rec,
+            (pipeline, set),
+            [
+                &targets.attachments.output,
+                &integral_or_output(targets, passes),
+            ],
+            shaded,
+        );
+    }
+}
+
+/// The integral image of a ray-traced draw (the output itself otherwise: never the case where a
+/// ray-tracing pipeline shades, which traces).
+fn integral_or_output<'a>(
+    targets: &'a DrawTargets<Deferred>,
+    passes: &DeferredPasses<'_>,
+) -> &'a Image {
+    integral_of(targets, passes).map_or(&targets.attachments.output, |i| &i.image)
+}
+
+/// shade_rt*.rgen over the strip's shaded rectangle (x, y, width, height in target pixels), after
+/// the coverage draw: the image and the integral image become storage images it writes where a
+/// sample is covered (the background and `NO_INTEGRAL` stay elsewhere).
+fn trace_pass(
+    rec: &mut Recorder<'_>,
+    (pipeline, set): (&RayTracingPipeline, &DescriptorSet),
+    images: [&Image; 2],
+    shaded: Option<(u32, u32, u32, u32)>,
+) {
+    let storage = ImageUse::new(Access::RayTracingShaderWrite, Layout::General);
+    for image in images {
+        rec.image_barrier(image, COLOR_ATTACHMENT, storage);
+    }
+    if let Some((x, y, width, height)) = shaded {
+        rec.bind_ray_tracing(pipeline, set);
+        let origin = TraceOrigin {
+            origin_x: x as i32,
+            origin_y: y as i32,
+        };
+        rec.push_ray_tracing_constants(pipeline, bytemuck::bytes_of(&origin));
+        rec.trace_rays(pipeline, width, height);
+    }
 }
 
 /// `shaded` in the strip's target rows (the target holds image rows `first_row..`) as a scissor
@@ -314,16 +415,22 @@ fn coverage_draw(rec: &mut Recorder<'_>, passes: &DeferredPasses<'_>) {
 }
 
 /// shade.frag: 1 > 0 passes where a sample is covered; early, so uncovered blocks are skipped.
-fn shade_draw(rec: &mut Recorder<'_>, passes: &DeferredPasses<'_>) {
-    rec.bind_graphics(passes.shade, passes.shade_set);
+fn shade_draw(rec: &mut Recorder<'_>, shade: &GraphicsPipeline, set: &DescriptorSet) {
+    rec.bind_graphics(shade, set);
     rec.draw(3);
 }
 
-/// The strip's single-sampled image to its rows of the readback buffer, visible to the host.
-fn copy_out(rec: &mut Recorder<'_>, image: &Image, readback: &Buffer, strip: Strip) {
+/// The strip's single-sampled image (last used as `before`) to its rows of the readback buffer,
+/// visible to the host.
+fn copy_out(
+    rec: &mut Recorder<'_>,
+    (image, before): (&Image, ImageUse),
+    readback: &Buffer,
+    strip: Strip,
+) {
     rec.image_barrier(
         image,
-        COLOR_ATTACHMENT,
+        before,
         ImageUse::new(Access::TransferRead, Layout::TransferSrc),
     );
     let row_bytes = u64::from(strip.image_width) * 16;

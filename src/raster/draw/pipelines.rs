@@ -8,14 +8,15 @@ use crate::environment::brdf_quadrature::{BRDF_HIT_SAMPLES, BRDF_SAMPLES};
 use crate::environment::gpu::GpuEnvironment;
 use crate::environment::EnvironmentModel;
 use crate::gpu::shaders::interface::{
-    DrawConstants, BACKGROUND_COLOR, BACKGROUND_ENVIRONMENT, ENV_IRRADIANCE_BINDING,
+    DrawConstants, TraceOrigin, BACKGROUND_COLOR, BACKGROUND_ENVIRONMENT, ENV_IRRADIANCE_BINDING,
     ENV_LAYERS_BINDING, ENV_LAYER_TEXELS_BINDING, FRAME_BINDING, FRESNEL_KNOTS_BINDING,
     GBUFFER_NORMAL_BINDING, GBUFFER_POSITION_BINDING, MAX_ENV_LAYERS, OBJECT_GEOMETRY_BINDING,
-    OBJECT_MATERIAL_BINDING, SCENE_TLAS_BINDING,
+    OBJECT_MATERIAL_BINDING, SCENE_TLAS_BINDING, SHADED_IMAGE_BINDING, SHADED_INTEGRAL_BINDING,
 };
 use crate::gpu::{
     AccelerationStructure, Binding, BindingKind, Buffer, DepthCompare, DepthTest, DescriptorSet,
-    Format, GpuContext, GraphicsPipeline, GraphicsPipelineDesc, Image, Resource, Sampler,
+    Format, GpuContext, GraphicsPipeline, GraphicsPipelineDesc, Image, PipelineLayout,
+    RayTracingPipeline, RayTracingPipelineDesc, Resource, Sampler,
 };
 use crate::Result;
 use std::collections::hash_map::Entry;
@@ -54,6 +55,26 @@ const SHADE_BINDINGS_TRACED: [Binding; 10] = [
     Binding::new(SCENE_TLAS_BINDING, BindingKind::AccelerationStructure),
     Binding::new(OBJECT_GEOMETRY_BINDING, BindingKind::StorageBuffer),
 ];
+
+/// The ray-tracing pipeline's shading (shade_rt*.rgen): [`SHADE_BINDINGS_TRACED`] and the image
+/// and integral image it writes.
+const SHADE_BINDINGS_RAY_PIPELINE: [Binding; 12] = {
+    let t = SHADE_BINDINGS_TRACED;
+    [
+        t[0],
+        t[1],
+        t[2],
+        t[3],
+        t[4],
+        t[5],
+        t[6],
+        t[7],
+        t[8],
+        t[9],
+        Binding::new(SHADED_IMAGE_BINDING, BindingKind::StorageImage),
+        Binding::new(SHADED_INTEGRAL_BINDING, BindingKind::StorageImage),
+    ]
+};
 
 /// [`SHADE_BINDINGS_TRACED`] without the acceleration structure.
 const SHADE_BINDINGS: &[Binding] = SHADE_BINDINGS_TRACED.split_at(8).0;
@@ -291,6 +312,8 @@ const TRACED_COLOR_FORMATS: [Format; 2] = [Format::Rgba32Float, Format::Rgba32Fl
 #[derive(Default)]
 pub(super) struct PipelineTable {
     pipelines: HashMap<PipelineKey, Arc<GraphicsPipeline>>,
+    /// The ray-tracing pipelines' shading (shade_rt*.rgen), keyed like `PipelineKind::Shade`.
+    ray_pipelines: HashMap<PipelineKey, Arc<RayTracingPipeline>>,
 }
 
 impl PipelineTable {
@@ -301,6 +324,46 @@ impl PipelineTable {
             Entry::Vacant(entry) => {
                 let constants = key.constants();
                 let pipeline = gpu.create_graphics_pipeline(&key.desc(&constants))?;
+                entry.insert(Arc::new(pipeline))
+            }
+        };
+        Ok(Arc::clone(pipeline))
+    }
+
+    /// The ray-tracing pipeline that shades `variant` (ray-traced) on a device without ray
+    /// queries, built now if this is its first use: `key.kind` must be `PipelineKind::Shade`.
+    pub fn ray_pipeline(
+        &mut self,
+        gpu: &GpuContext,
+        key: PipelineKey,
+    ) -> Result<Arc<RayTracingPipeline>> {
+        let pipeline = match self.ray_pipelines.entry(key) {
+            Entry::Occupied(entry) => entry.into_mut(),
+            Entry::Vacant(entry) => {
+                use crate::gpu::shaders::*;
+                let PipelineKind::Shade(variant) = key.kind else {
+                    return Err(crate::Error::invalid(
+                        "ray-tracing pipeline",
+                        format!("{:?}", key.kind),
+                        "only the shading pass has one",
+                    ));
+                };
+                let constants = key.constants();
+                let raygen_spirv = match (variant.environment_model, key.samples > 1) {
+                    (EnvironmentModel::Paper, false) => SHADE_RT_RGEN,
+                    (EnvironmentModel::Paper, true) => SHADE_RT_MS_RGEN,
+                    (EnvironmentModel::Brdf, false) => SHADE_RT_BRDF_RGEN,
+                    (EnvironmentModel::Brdf, true) => SHADE_RT_BRDF_MS_RGEN,
+                };
+                let pipeline = gpu.create_ray_tracing_pipeline(&RayTracingPipelineDesc {
+                    name: "shade (ray-tracing pipeline)",
+                    raygen_spirv,
+                    miss_spirv: TRACE_MISS_RMISS,
+                    closest_hit_spirv: TRACE_HIT_RCHIT,
+                    bindings: &SHADE_BINDINGS_RAY_PIPELINE,
+                    push_constant_size: std::mem::size_of::<TraceOrigin>() as u32,
+                    raygen_constants: constants.words(),
+                })?;
                 entry.insert(Arc::new(pipeline))
             }
         };
@@ -348,15 +411,17 @@ pub(super) fn graphics_set(
 /// A set of [`SHADE_BINDINGS`]: the draw's buffers, the environment (`layer_texels`: its
 /// [`GpuEnvironment::layer_texels`] in the `brdf` model, any texel buffer in the `paper` model,
 /// which never reads it) and the G-buffer; with `traced` (the top-level structure and the
-/// objects' mesh addresses), of [`SHADE_BINDINGS_TRACED`].
+/// objects' mesh addresses), of [`SHADE_BINDINGS_TRACED`]; with `storage` too (the image and the
+/// integral image), of [`SHADE_BINDINGS_RAY_PIPELINE`].
 pub(super) fn shade_set(
     gpu: &GpuContext,
-    pipeline: &GraphicsPipeline,
+    layout: &PipelineLayout,
     buffers: &DrawBuffers,
     (environment, layer_texels): (&GpuEnvironment, &Buffer),
     sampler: &Sampler,
     (position, normal): (&Image, &Image),
     traced: Option<(&AccelerationStructure, &Buffer)>,
+    storage: Option<(&Image, &Image)>,
 ) -> Result<DescriptorSet> {
     let mut resources = vec![
         (FRAME_BINDING, Resource::Buffer(&buffers.scene_frame)),
@@ -390,7 +455,11 @@ pub(super) fn shade_set(
         resources.push((SCENE_TLAS_BINDING, Resource::AccelerationStructure(scene)));
         resources.push((OBJECT_GEOMETRY_BINDING, Resource::Buffer(geometry)));
     }
-    Ok(gpu.create_descriptor_set(pipeline.layout(), &resources)?)
+    if let Some((image, integral)) = storage {
+        resources.push((SHADED_IMAGE_BINDING, Resource::StorageImage(image)));
+        resources.push((SHADED_INTEGRAL_BINDING, Resource::StorageImage(integral)));
+    }
+    Ok(gpu.create_descriptor_set(layout, &resources)?)
 }
 
 #[cfg(test)]

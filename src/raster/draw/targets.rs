@@ -18,7 +18,7 @@
 //! submissions on the queue), and every render clears what it draws into.
 
 use super::get_or_try_insert;
-use crate::gpu::{Buffer, BufferDesc, GpuContext, Image, ImageDesc};
+use crate::gpu::{Buffer, BufferDesc, GpuContext, Image, ImageDesc, ImageUsage};
 use crate::Result;
 
 /// Largest multisampled colour attachment (bytes); the depth target is a quarter of it.
@@ -82,10 +82,24 @@ impl Attachments for Deferred {
         Ok(Deferred {
             position: gbuffer("g-buffer position")?,
             normal: gbuffer("g-buffer normal")?,
-            output: gpu.create_image(ImageDesc::color_target("shaded", width, rows, 1))?,
+            output: gpu.create_image(shaded_target(gpu, "shaded", width, rows))?,
             coverage: gpu.create_image(ImageDesc::depth_target("coverage", width, rows, 1))?,
             integral: None,
         })
+    }
+}
+
+/// The shading pass's single-sampled output (the image or the integral image): a colour target,
+/// and on a device that shades ray-traced draws in a ray-tracing pipeline also a storage image
+/// (shade_rt_pipeline.glsl writes it).
+fn shaded_target(gpu: &GpuContext, name: &str, width: u32, rows: u32) -> ImageDesc {
+    let desc = ImageDesc::color_target(name, width, rows, 1);
+    match gpu.info().ray_query.uses_pipeline() {
+        true => {
+            let usage = ImageUsage::COLOR_ATTACHMENT | ImageUsage::TRANSFER_SRC;
+            desc.usage(usage | ImageUsage::STORAGE)
+        }
+        false => desc,
     }
 }
 
@@ -97,7 +111,7 @@ impl DrawTargets<Deferred> {
         get_or_try_insert(&mut self.attachments.integral, || {
             let image_bytes = u64::from(width) * u64::from(height) * 16;
             Ok(IntegralTarget {
-                image: gpu.create_image(ImageDesc::color_target("integral", width, rows, 1))?,
+                image: gpu.create_image(shaded_target(gpu, "integral", width, rows))?,
                 readback: gpu
                     .create_buffer(BufferDesc::readback("integral readback", image_bytes))?,
                 used: false,

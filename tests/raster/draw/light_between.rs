@@ -5,8 +5,9 @@
 //! on a device without ray queries.
 
 use super::shadows::{
-    bowl_in_bowl, camera_looking_down, draw, draw_with_integral, gpu_or_skip, lights, material,
-    relative_errors, sphere_on_board, traced_objects, Material, RADIANCE_FLOOR,
+    bowl_in_bowl, camera_looking_down, draw, draw_objects, draw_with_integral, gpu_or_skip, lights,
+    material, ray_pipeline_gpu_or_skip, relative_errors, scene, sphere_on_board, traced_objects,
+    Material, RADIANCE_FLOOR,
 };
 use crate::common::{quantile, write_failure_images};
 use glam::DVec3;
@@ -21,6 +22,7 @@ use shikki::output::HdrImage;
 use shikki::raster::camera::Camera;
 use shikki::raster::draw::denoise::denoise_sigma;
 use shikki::raster::draw::RayTracing;
+use shikki::raster::draw::{Background, LacquerRenderer, RenderSettings};
 use shikki::raster::lights::Light;
 use shikki::raster::mesh::{self, Mesh};
 
@@ -139,10 +141,15 @@ fn spread_errors(gpu: &HdrImage, twin: &HdrImage, plain: &HdrImage) -> Vec<f64> 
 }
 
 fn compare_with_twin(name: &str, case: &Case<'_>, rt: RayTracing) {
-    let Some(gpu) = gpu_or_skip() else { return };
-    let (env, irradiance) = constant_environment(&gpu);
+    if let Some(gpu) = gpu_or_skip() {
+        compare_with_twin_on(&gpu, name, case, rt);
+    }
+}
+
+fn compare_with_twin_on(gpu: &GpuContext, name: &str, case: &Case<'_>, rt: RayTracing) {
+    let (env, irradiance) = constant_environment(gpu);
     let (traced, integral) = draw_with_integral(
-        &gpu,
+        gpu,
         (case.meshes, case.materials),
         (case.camera, case.lights),
         (Some(&env), case.model),
@@ -150,7 +157,7 @@ fn compare_with_twin(name: &str, case: &Case<'_>, rt: RayTracing) {
         case.size,
     );
     let integral = integral.expect("a ray-traced draw has an integral image");
-    let plain = gpu_render(&gpu, case, &env, None);
+    let plain = gpu_render(gpu, case, &env, None);
     let (twin, twin_integral) = twin_render(case, irradiance, &rt);
     assert!(
         traced.pixels.iter().flatten().all(|v| v.is_finite())
@@ -215,8 +222,8 @@ fn integral_image(integral: &HdrImage) -> HdrImage {
     image
 }
 
-#[test]
-fn sphere_on_board_matches_its_cpu_twin() {
+/// Sphere on board in both environment models (`paper` 1 bounce, `brdf` 2), compared by `compare`.
+fn sphere_on_board_cases(compare: impl Fn(&str, &Case<'_>, RayTracing)) {
     let (red, black) = (material("smooth-red"), material("rough-black"));
     let meshes = sphere_on_board();
     let lights = lights();
@@ -237,12 +244,12 @@ fn sphere_on_board_matches_its_cpu_twin() {
             seed: 7,
             denoise: false,
         };
-        compare_with_twin(&format!("between-sphere-board-{}", model.name()), &case, rt);
+        compare(&format!("between-sphere-board-{}", model.name()), &case, rt);
     }
 }
 
-#[test]
-fn bowl_in_bowl_matches_its_cpu_twin() {
+/// A bowl in a bowl (concave self-reflection), `brdf`, 2 bounces, compared by `compare`.
+fn bowl_in_bowl_case(compare: impl Fn(&str, &Case<'_>, RayTracing)) {
     let (red, black) = (material("smooth-red"), material("smooth-black"));
     let meshes = bowl_in_bowl();
     let lights = lights();
@@ -267,7 +274,105 @@ fn bowl_in_bowl_matches_its_cpu_twin() {
         seed: 1,
         denoise: false,
     };
-    compare_with_twin("between-bowl-in-bowl", &case, rt);
+    compare("between-bowl-in-bowl", &case, rt);
+}
+
+#[test]
+fn sphere_on_board_matches_its_cpu_twin() {
+    sphere_on_board_cases(compare_with_twin);
+}
+
+#[test]
+fn bowl_in_bowl_matches_its_cpu_twin() {
+    bowl_in_bowl_case(compare_with_twin);
+}
+
+/// The ray-tracing pipeline path (shade_rt*.rgen: devices with no ray queries, NVIDIA's
+/// H100/H200) against the same twin with the same bounds: lavapipe has both paths.
+#[test]
+fn sphere_on_board_in_a_ray_tracing_pipeline_matches_its_cpu_twin() {
+    let Some(gpu) = ray_pipeline_gpu_or_skip() else {
+        return;
+    };
+    sphere_on_board_cases(|name, case, rt| {
+        compare_with_twin_on(&gpu, &format!("{name}-pipeline"), case, rt)
+    });
+}
+
+#[test]
+fn bowl_in_bowl_in_a_ray_tracing_pipeline_matches_its_cpu_twin() {
+    let Some(gpu) = ray_pipeline_gpu_or_skip() else {
+        return;
+    };
+    bowl_in_bowl_case(|name, case, rt| {
+        compare_with_twin_on(&gpu, &format!("{name}-pipeline"), case, rt)
+    });
+}
+
+/// The two ways of tracing draw the same image at 4× MSAA (shade_rt_brdf_ms.rgen against
+/// shade_rt_brdf_ms.frag, with the environment as background: the coverage draw's pixels the
+/// ray generation shader must leave alone) and 1× (the `paper` variants): the same shading code,
+/// the same sequence, the same rays, compiled into another stage.
+#[test]
+fn a_ray_tracing_pipeline_draws_what_ray_queries_draw() {
+    let Some(queries) = gpu_or_skip().filter(|g| !g.info().ray_query.uses_pipeline()) else {
+        return;
+    };
+    let Some(pipeline) = ray_pipeline_gpu_or_skip() else {
+        return;
+    };
+    let (red, black) = (material("smooth-red"), material("rough-black"));
+    let meshes = sphere_on_board();
+    let lights = lights();
+    let camera = camera_looking_down();
+    let objects = draw_objects((&meshes, &[&red, &black]));
+    for (model, samples) in [(EnvironmentModel::Brdf, 4), (EnvironmentModel::Paper, 1)] {
+        let rt = RayTracing {
+            shadows: true,
+            bounces: 2,
+            rays: 4,
+            seed: 3,
+            denoise: false,
+        };
+        let render = |gpu: &GpuContext| {
+            let (env, _) = constant_environment(gpu);
+            let mut scene = scene(&objects, (&camera, &lights), (Some(&env), model), Some(rt));
+            scene.background = Background::Environment;
+            let settings = RenderSettings {
+                width: 80,
+                height: 72,
+                samples,
+            };
+            let drawn = LacquerRenderer::new()
+                .render_with_integral(gpu, &scene, &settings)
+                .unwrap();
+            crate::common::assert_no_validation_messages(gpu);
+            drawn
+        };
+        let (a, a_integral) = render(&queries);
+        let (b, b_integral) = render(&pipeline);
+        let (a_integral, b_integral) = (a_integral.unwrap(), b_integral.unwrap());
+        let worst = |x: &HdrImage, y: &HdrImage| {
+            x.pixels
+                .iter()
+                .zip(&y.pixels)
+                .flat_map(|(p, q)| (0..4).map(move |c| (p[c] - q[c]).abs() / q[c].abs().max(1e-3)))
+                .fold(0.0_f32, f32::max)
+        };
+        let (image, integral) = (worst(&b, &a), worst(&b_integral, &a_integral));
+        eprintln!(
+            "{} at {samples}×: pipeline vs ray queries, worst {image:.2e} (image), {integral:.2e} \
+             (integral)",
+            model.name()
+        );
+        if image > 1e-5 {
+            write_failure_images(&format!("ray-pipeline-{}", model.name()), &b, &a);
+        }
+        assert!(
+            image <= 1e-5 && integral <= 1e-5,
+            "{image:.3e} {integral:.3e}"
+        );
+    }
 }
 
 /// A lone sphere under the sky: no ray it sends can meet another object, so the integral is 0

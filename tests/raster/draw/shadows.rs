@@ -12,7 +12,7 @@ use glam::{DMat4, DVec3};
 use shikki::environment::gpu::GpuEnvironment;
 use shikki::environment::params::ViewBlur;
 use shikki::environment::EnvironmentModel;
-use shikki::gpu::GpuContext;
+use shikki::gpu::{ContextOptions, GpuContext, RayTracingChoice};
 use shikki::model::{BrdfParams, FresnelTable, LacquerMaterial};
 use shikki::oracle::shadows::{TracedObject, TracedScene};
 use shikki::output::HdrImage;
@@ -42,6 +42,29 @@ pub(super) fn gpu_or_skip() -> Option<GpuContext> {
     if !gpu.info().ray_query.is_enabled() {
         eprintln!(
             "skipped: {} has no ray queries ({})",
+            gpu.info().name,
+            gpu.info().ray_query.summary()
+        );
+        return None;
+    }
+    Some(gpu)
+}
+
+/// A validated context that traces rays by a ray-tracing pipeline even where the device has ray
+/// queries (`RayTracingChoice::Pipeline`, the path of NVIDIA's H100/H200, which have no ray
+/// queries); None, with a line on stderr, where the device has no ray-tracing pipelines.
+pub(super) fn ray_pipeline_gpu_or_skip() -> Option<GpuContext> {
+    let gpu = GpuContext::new(&ContextOptions {
+        validation: true,
+        synchronization_validation: true,
+        device_name: std::env::var("SHIKKI_DEVICE").ok(),
+        ray_tracing: RayTracingChoice::Pipeline,
+        ..ContextOptions::default()
+    })
+    .expect("a validated Vulkan context");
+    if !gpu.info().ray_query.uses_pipeline() {
+        eprintln!(
+            "skipped: {} has no ray-tracing pipelines ({})",
             gpu.info().name,
             gpu.info().ray_query.summary()
         );
