@@ -6,7 +6,8 @@
 //!   the driver's. Mesa keeps compiled shaders in its own on-disk cache (`MESA_SHADER_CACHE_DIR`,
 //!   by default under `~/.cache`); on lavapipe that is where a warm start saves the LLVM
 //!   compilation, since the Vulkan pipeline cache there is a bare header. The child gets a fresh
-//!   one inside the scratch directory, so "cold" is a first run on a fresh machine.
+//!   one inside the scratch directory, so "cold" is a first run on a fresh machine (NVIDIA's
+//!   driver, whose cache `__GL_SHADER_DISK_CACHE_PATH` names, gets the same directory).
 //! - Driver cache only: shikki's caches empty, the driver's shader cache filled (shikki run before
 //!   with another cache directory): what the prefiltered-environment cache alone saves.
 //! - Warm: every cache filled by a first run.
@@ -87,6 +88,11 @@ pub(crate) fn run_shikki(
         .env_remove("SHIKKI_ENV_CACHE")
         .env("MESA_SHADER_CACHE_DIR", driver_cache_dir)
         .env_remove("MESA_SHADER_CACHE_DISABLE")
+        // NVIDIA's driver keeps its compiled shaders in a cache of its own (by default under
+        // ~/.cache/nvidia): the same directory, so that "cold" is cold there too.
+        .env("__GL_SHADER_DISK_CACHE_PATH", driver_cache_dir)
+        .env("__GL_SHADER_DISK_CACHE", "1")
+        .env("__GL_SHADER_DISK_CACHE_SKIP_CLEANUP", "1")
         .env(REPORT_PEAK_MEMORY, "1")
         .output()
         .map_err(|source| Error::Read {
