@@ -186,7 +186,7 @@ impl RayQuery {
         match self {
             RayQuery::Enabled => "yes".into(),
             RayQuery::Pipeline => {
-                "traced by a ray-tracing pipeline (VK_KHR_ray_tracing_pipeline)".into()
+                "rays traced by a ray-tracing pipeline instead (VK_KHR_ray_tracing_pipeline)".into()
             }
             RayQuery::Disabled => "available, turned off (SHIKKI_RAY_QUERY=0)".into(),
             RayQuery::Missing(what) => format!("no ({what})"),
@@ -401,6 +401,23 @@ fn ray_tracing_lack(
     Ok((!lacking.is_empty()).then(|| format!("feature {} not supported", lacking.join(", "))))
 }
 
+/// How a device traces rays, given the choice and what it lacks for ray queries and for the
+/// ray-tracing pipeline path (`None`: nothing).
+fn ray_tracing_of(
+    choice: RayTracingChoice,
+    queries: Option<String>,
+    pipeline: Option<String>,
+) -> RayQuery {
+    match (choice, queries, pipeline) {
+        (RayTracingChoice::Auto, None, _) => RayQuery::Enabled,
+        (RayTracingChoice::Auto | RayTracingChoice::Pipeline, _, None) => RayQuery::Pipeline,
+        (RayTracingChoice::Off, None, _) | (RayTracingChoice::Off, _, None) => RayQuery::Disabled,
+        // Asked for the pipeline on a device with ray queries only: say what it lacks.
+        (RayTracingChoice::Pipeline, _, Some(what)) => RayQuery::Missing(what),
+        (_, Some(what), Some(_)) => RayQuery::Missing(what),
+    }
+}
+
 fn describe(
     instance: &ash::Instance,
     device: vk::PhysicalDevice,
@@ -425,16 +442,11 @@ fn describe(
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     let v = props.api_version;
-    let queries = ray_tracing_lack(instance, device, false)?;
-    let pipeline = ray_tracing_lack(instance, device, true)?;
-    let ray_query = match (choice, queries, pipeline) {
-        (RayTracingChoice::Auto, None, _) => RayQuery::Enabled,
-        (RayTracingChoice::Auto | RayTracingChoice::Pipeline, _, None) => RayQuery::Pipeline,
-        (RayTracingChoice::Off, None, _) | (RayTracingChoice::Off, _, None) => RayQuery::Disabled,
-        // Asked for the pipeline on a device with ray queries only: say what it lacks.
-        (RayTracingChoice::Pipeline, _, Some(what)) => RayQuery::Missing(what),
-        (_, Some(what), Some(_)) => RayQuery::Missing(what),
-    };
+    let ray_query = ray_tracing_of(
+        choice,
+        ray_tracing_lack(instance, device, false)?,
+        ray_tracing_lack(instance, device, true)?,
+    );
     let quirks = Quirks::of_driver(driver.driver_id, &driver_info);
     Ok(AdapterInfo {
         name,
@@ -472,6 +484,39 @@ fn describe(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Ray queries first, the ray-tracing pipeline where they are missing (or asked for), off
+    /// only when asked; what is missing names the ray queries' lack unless the pipeline was
+    /// asked for.
+    #[test]
+    fn ray_tracing_prefers_queries_then_the_pipeline() {
+        use RayTracingChoice::{Auto, Off, Pipeline};
+        let lack = |what: &str| Some(what.to_string());
+        let cases = [
+            (Auto, None, None, RayQuery::Enabled),
+            (Auto, None, lack("p"), RayQuery::Enabled),
+            (Auto, lack("q"), None, RayQuery::Pipeline),
+            (Auto, lack("q"), lack("p"), RayQuery::Missing("q".into())),
+            (Pipeline, None, None, RayQuery::Pipeline),
+            (Pipeline, lack("q"), None, RayQuery::Pipeline),
+            (Pipeline, None, lack("p"), RayQuery::Missing("p".into())),
+            (
+                Pipeline,
+                lack("q"),
+                lack("p"),
+                RayQuery::Missing("p".into()),
+            ),
+            (Off, None, lack("p"), RayQuery::Disabled),
+            (Off, lack("q"), None, RayQuery::Disabled),
+            (Off, lack("q"), lack("p"), RayQuery::Missing("q".into())),
+        ];
+        for (choice, queries, pipeline, expected) in cases {
+            let got = ray_tracing_of(choice, queries.clone(), pipeline.clone());
+            let traced = matches!(expected, RayQuery::Enabled | RayQuery::Pipeline);
+            assert_eq!(got.is_enabled(), traced);
+            assert_eq!(got, expected, "{choice:?} {queries:?} {pipeline:?}");
+        }
+    }
 
     const MESA_22: &str = "Mesa 22.3.6 (LLVM 15.0.6)";
     const MESA_25: &str = "Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)";

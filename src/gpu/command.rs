@@ -7,7 +7,7 @@
 use super::buffer::Buffer;
 use super::conv::{self, Access, Layout};
 use super::image::Image;
-use super::pipeline::{ComputePipeline, DescriptorSet, GraphicsPipeline};
+use super::pipeline::{ComputePipeline, DescriptorSet, GraphicsPipeline, PipelineLayout};
 use super::query::TimestampPool;
 use super::ray_pipeline::RayTracingPipeline;
 use ash::vk;
@@ -232,19 +232,44 @@ impl Recorder<'_> {
     }
 
     pub fn bind_graphics(&mut self, pipeline: &GraphicsPipeline, set: &DescriptorSet) {
-        // SAFETY: recording; pipeline and set are live and compatible (same layout).
+        let point = vk::PipelineBindPoint::GRAPHICS;
+        self.bind(point, pipeline.raw, &pipeline.layout, set);
+    }
+
+    /// Binds a pipeline at `point` and its set 0.
+    fn bind(
+        &mut self,
+        point: vk::PipelineBindPoint,
+        pipeline: vk::Pipeline,
+        layout: &PipelineLayout,
+        set: &DescriptorSet,
+    ) {
+        // SAFETY: recording; pipeline and set are live and compatible (the set was made from
+        // this layout).
         unsafe {
-            self.device
-                .cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
+            self.device.cmd_bind_pipeline(self.cmd, point, pipeline);
             self.device.cmd_bind_descriptor_sets(
                 self.cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                pipeline.layout.raw,
+                point,
+                layout.raw,
                 0,
                 std::slice::from_ref(&set.raw),
                 &[],
             );
         }
+    }
+
+    /// Push constants for a pipeline of `layout`; `bytes` must fit its declared block.
+    fn push(&mut self, layout: &PipelineLayout, bytes: &[u8]) {
+        let len = bytes.len().min(layout.push_constant_size as usize);
+        if len == 0 {
+            return;
+        }
+        // SAFETY: recording; the range is within the layout's push constant block.
+        unsafe {
+            self.device
+                .cmd_push_constants(self.cmd, layout.raw, layout.stages, 0, &bytes[..len])
+        };
     }
 
     /// Binds the interleaved vertex buffer (binding 0) and the u32 index buffer.
@@ -277,66 +302,23 @@ impl Recorder<'_> {
     }
 
     pub fn bind_compute(&mut self, pipeline: &ComputePipeline, set: &DescriptorSet) {
-        // SAFETY: recording; pipeline and set are live and compatible.
-        unsafe {
-            self.device
-                .cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw);
-            self.device.cmd_bind_descriptor_sets(
-                self.cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                pipeline.layout.raw,
-                0,
-                std::slice::from_ref(&set.raw),
-                &[],
-            );
-        }
+        let point = vk::PipelineBindPoint::COMPUTE;
+        self.bind(point, pipeline.raw, &pipeline.layout, set);
     }
 
     /// Push constants for a compute pipeline; `bytes` must fit its declared block.
     pub fn push_constants(&mut self, pipeline: &ComputePipeline, bytes: &[u8]) {
-        let layout = &pipeline.layout;
-        let len = bytes.len().min(layout.push_constant_size as usize);
-        if len == 0 {
-            return;
-        }
-        // SAFETY: recording; the range is within the layout's push constant block.
-        unsafe {
-            self.device
-                .cmd_push_constants(self.cmd, layout.raw, layout.stages, 0, &bytes[..len])
-        };
+        self.push(&pipeline.layout, bytes);
     }
 
     pub fn bind_ray_tracing(&mut self, pipeline: &RayTracingPipeline, set: &DescriptorSet) {
-        // SAFETY: recording; pipeline and set are live and compatible.
-        unsafe {
-            self.device.cmd_bind_pipeline(
-                self.cmd,
-                vk::PipelineBindPoint::RAY_TRACING_KHR,
-                pipeline.raw,
-            );
-            self.device.cmd_bind_descriptor_sets(
-                self.cmd,
-                vk::PipelineBindPoint::RAY_TRACING_KHR,
-                pipeline.layout.raw,
-                0,
-                std::slice::from_ref(&set.raw),
-                &[],
-            );
-        }
+        let point = vk::PipelineBindPoint::RAY_TRACING_KHR;
+        self.bind(point, pipeline.raw, &pipeline.layout, set);
     }
 
     /// Push constants for a ray-tracing pipeline; `bytes` must fit its declared block.
     pub fn push_ray_tracing_constants(&mut self, pipeline: &RayTracingPipeline, bytes: &[u8]) {
-        let layout = &pipeline.layout;
-        let len = bytes.len().min(layout.push_constant_size as usize);
-        if len == 0 {
-            return;
-        }
-        // SAFETY: recording; the range is within the layout's push constant block.
-        unsafe {
-            self.device
-                .cmd_push_constants(self.cmd, layout.raw, layout.stages, 0, &bytes[..len])
-        };
+        self.push(&pipeline.layout, bytes);
     }
 
     /// Launches `pipeline`'s ray generation shader `width` × `height` times (it is bound).

@@ -15,8 +15,9 @@ fn shikki(dir: &Path, ray_query: bool, args: &[&str]) -> Output {
         .current_dir(dir)
         .env("SHIKKI_VALIDATION", "1")
         .env("SHIKKI_SYNC_VALIDATION", "1")
-        .env("SHIKKI_PIPELINE_CACHE", "0")
-        .env_remove("SHIKKI_RAY_QUERY");
+        .env("SHIKKI_PIPELINE_CACHE", "0");
+    // With rays on, the child traces as this process's contexts do (`SHIKKI_RAY_QUERY` inherited:
+    // unset, or `pipeline`).
     if !ray_query {
         command.env("SHIKKI_RAY_QUERY", "0");
     }

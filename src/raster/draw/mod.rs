@@ -67,7 +67,7 @@ use passes::{
 };
 use pipelines::{
     fresnel_on_pow2_grid, graphics_set, shade_set, PipelineKey, PipelineKind, PipelineTable,
-    ShadeVariant,
+    ShadeVariant, TracedResources,
 };
 use std::sync::Arc;
 use targets::{traced_strip_rows, TargetCache};
@@ -435,36 +435,32 @@ fn draw_deferred(
         targets.integral(gpu)?;
     }
     let gbuffer_images = (&targets.attachments.position, &targets.attachments.normal);
-    let traced_resources = structures
+    let scene_structures = structures
         .as_ref()
         .map(|(scene, geometry)| (scene, geometry));
+    // The shading pass's resources in a set of `layout`'s, with `storage` the images a
+    // ray-tracing pipeline writes.
+    let set_of = |layout, storage| {
+        shade_set(
+            gpu,
+            layout,
+            buffers,
+            (inputs.environment, layer_texels),
+            inputs.sampler,
+            gbuffer_images,
+            scene_structures.map(|scene| TracedResources { scene, storage }),
+        )
+    };
     // coverage.frag's set, which shade*.frag shares (the same bindings).
-    let coverage_set = shade_set(
-        gpu,
-        coverage.layout(),
-        buffers,
-        (inputs.environment, layer_texels),
-        inputs.sampler,
-        gbuffer_images,
-        traced_resources,
-        None,
-    )?;
+    let coverage_set = set_of(coverage.layout(), None)?;
     let shade = match ray_pipeline {
         true => {
             let pipeline = pipelines.ray_pipeline(gpu, shade_key)?;
             // The images it writes: the shading pass's outputs (a ray-traced draw has both).
             let output = &targets.attachments.output;
             let integral = targets.attachments.integral.as_ref();
-            let set = shade_set(
-                gpu,
-                pipeline.layout(),
-                buffers,
-                (inputs.environment, layer_texels),
-                inputs.sampler,
-                gbuffer_images,
-                traced_resources,
-                Some((output, integral.map_or(output, |i| &i.image))),
-            )?;
+            let storage = (output, integral.map_or(output, |i| &i.image));
+            let set = set_of(pipeline.layout(), Some(storage))?;
             ShadePipeline::Ray(pipeline, set)
         }
         false => ShadePipeline::Fragment(pipelines.get(gpu, shade_key)?),

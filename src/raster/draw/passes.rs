@@ -350,7 +350,7 @@ fn shading_pass(
             (pipeline, set),
             [
                 &targets.attachments.output,
-                &integral_or_output(targets, passes),
+                integral_or_output(targets, passes),
             ],
             shaded,
         );

@@ -408,11 +408,21 @@ pub(super) fn graphics_set(
     )?)
 }
 
+/// What a ray-traced shading pass's set adds.
+#[derive(Clone, Copy)]
+pub(super) struct TracedResources<'a> {
+    /// The draw's top-level structure and its objects' mesh addresses.
+    pub scene: (&'a AccelerationStructure, &'a Buffer),
+    /// The image and the integral image a ray-tracing pipeline writes (None: the fragment
+    /// shading pass's set, or the coverage draw's).
+    pub storage: Option<(&'a Image, &'a Image)>,
+}
+
 /// A set of [`SHADE_BINDINGS`]: the draw's buffers, the environment (`layer_texels`: its
 /// [`GpuEnvironment::layer_texels`] in the `brdf` model, any texel buffer in the `paper` model,
 /// which never reads it) and the G-buffer; with `traced` (the top-level structure and the
-/// objects' mesh addresses), of [`SHADE_BINDINGS_TRACED`]; with `storage` too (the image and the
-/// integral image), of [`SHADE_BINDINGS_RAY_PIPELINE`].
+/// objects' mesh addresses), of [`SHADE_BINDINGS_TRACED`]; with its `storage` too (the image and
+/// the integral image), of [`SHADE_BINDINGS_RAY_PIPELINE`].
 pub(super) fn shade_set(
     gpu: &GpuContext,
     layout: &PipelineLayout,
@@ -420,8 +430,7 @@ pub(super) fn shade_set(
     (environment, layer_texels): (&GpuEnvironment, &Buffer),
     sampler: &Sampler,
     (position, normal): (&Image, &Image),
-    traced: Option<(&AccelerationStructure, &Buffer)>,
-    storage: Option<(&Image, &Image)>,
+    traced: Option<TracedResources<'_>>,
 ) -> Result<DescriptorSet> {
     let mut resources = vec![
         (FRAME_BINDING, Resource::Buffer(&buffers.scene_frame)),
@@ -451,11 +460,15 @@ pub(super) fn shade_set(
             Resource::TexelBuffer(layer_texels),
         ),
     ];
-    if let Some((scene, geometry)) = traced {
+    if let Some(TracedResources {
+        scene: (scene, geometry),
+        ..
+    }) = traced
+    {
         resources.push((SCENE_TLAS_BINDING, Resource::AccelerationStructure(scene)));
         resources.push((OBJECT_GEOMETRY_BINDING, Resource::Buffer(geometry)));
     }
-    if let Some((image, integral)) = storage {
+    if let Some((image, integral)) = traced.and_then(|t| t.storage) {
         resources.push((SHADED_IMAGE_BINDING, Resource::StorageImage(image)));
         resources.push((SHADED_INTEGRAL_BINDING, Resource::StorageImage(integral)));
     }
