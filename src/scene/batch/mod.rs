@@ -15,6 +15,7 @@
 //! [`super::SceneRenderer`].
 
 mod collisions;
+pub mod encoders;
 pub mod manifest;
 pub mod name;
 pub mod run;

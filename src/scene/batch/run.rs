@@ -1,6 +1,8 @@
 //! Executes a [`BatchPlan`]: one GPU context and one [`SceneRenderer`] for the whole run; the
-//! render thread hands each image to a writer thread (bounded channel) that encodes, writes,
-//! records the manifest and keeps the contact-sheet tile, so encoding overlaps the next render.
+//! render thread hands each image to the encoders (a bounded channel; [`super::encoders`]: one
+//! thread, or several on a machine with the cores), which encode and write it and make its
+//! contact-sheet tile, and a writer thread records the manifest in job order, so encoding
+//! overlaps the next render.
 //! Before the output directory is even created, [`BatchPlan::check_outputs`] refuses a plan in
 //! which two jobs would share a file.
 //!
@@ -16,8 +18,9 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{mpsc, Arc};
+use std::sync::{mpsc, Arc, Mutex};
 
+use super::encoders::{encode_loop, encoder_count, in_order, message_bytes, InFlight, Written};
 use super::manifest::{self, Manifest, ManifestRow, STATUS_OK};
 use super::sheet::{contact_sheet_png, Thumbnail, Tile};
 use super::sink::{self, FileSystem, OutputSink};
@@ -27,8 +30,8 @@ use crate::output::{self, HdrImage, OutputFormat, PngSettings};
 use crate::scene::SceneRenderer;
 use crate::{Error, Result};
 
-/// Images waiting for the writer; two keep the GPU busy while one encodes without holding many
-/// full-size images in memory.
+/// Images waiting for an encoder; two keep the GPU busy while the encoders work without holding
+/// many full-size images in memory (the encoders' own are bounded in bytes: `encoders::InFlight`).
 const WRITER_QUEUE: usize = 2;
 
 /// What `shikki batch` was asked to do.
@@ -47,6 +50,11 @@ pub struct BatchOptions {
     pub cancel: Arc<AtomicBool>,
     /// Where every file is written: [`FileSystem`], unless a caller injects failures.
     pub sink: Arc<dyn OutputSink>,
+    /// Threads that encode and write images at once (at least 1): by default as many as the
+    /// machine has cores beside the render and writer threads, at most 8
+    /// ([`encoder_count`](super::encoders::encoder_count)). The files, manifest and contact
+    /// sheet are the same for any count.
+    pub encoders: usize,
 }
 
 impl BatchOptions {
@@ -59,6 +67,7 @@ impl BatchOptions {
             observer: Arc::new(Silent),
             cancel: Arc::new(AtomicBool::new(false)),
             sink: Arc::new(FileSystem),
+            encoders: encoder_count(),
         }
     }
 }
@@ -96,8 +105,8 @@ pub struct BatchSummary {
     pub contact_sheet: PathBuf,
 }
 
-/// What the render thread tells the writer.
-enum Message {
+/// What the render thread tells the encoders.
+pub(super) enum Message {
     Render {
         row: ManifestRow,
         path: PathBuf,
@@ -151,12 +160,24 @@ pub fn run_batch(
     let observer = options.observer.as_ref();
     observer.start(jobs.len());
 
-    let (sender, receiver) = mpsc::sync_channel::<Message>(WRITER_QUEUE);
+    let (sender, receiver) = mpsc::sync_channel::<(usize, Message)>(WRITER_QUEUE);
+    let (done, written) = mpsc::channel();
+    let receiver = Mutex::new(receiver);
+    let encoder_count = options.encoders.max(1);
+    let in_flight = InFlight::new(encoder_count);
     let writer_manifest = Manifest::new(manifest_path.clone(), &sweep_paths);
     let sink: &dyn OutputSink = options.sink.as_ref();
     let mut started = 0;
     let result = std::thread::scope(|scope| {
-        let writer = scope.spawn(move || write_loop(receiver, writer_manifest, observer, sink));
+        let encoders: Vec<_> = (0..encoder_count)
+            .map(|_| {
+                let done = done.clone();
+                let (receiver, in_flight) = (&receiver, &in_flight);
+                scope.spawn(move || encode_loop(receiver, done, in_flight, sink))
+            })
+            .collect();
+        drop(done);
+        let writer = scope.spawn(move || write_loop(written, writer_manifest, observer, sink));
         for job in &jobs {
             if options.cancel.load(Ordering::SeqCst) {
                 break;
@@ -169,14 +190,17 @@ pub fn run_batch(
             if let Message::Failed { row } = &message {
                 observer.line(&format!("error: job {}: {}", row.job, row.status));
             }
-            if sender.send(message).is_err() {
-                break; // The writer stopped: its error is returned below.
+            in_flight.acquire(message_bytes(&message));
+            if sender.send((started - 1, message)).is_err() {
+                break; // The encoders stopped: the writer's error is returned below.
             }
         }
         drop(sender);
-        writer
-            .join()
-            .map_err(|_| Error::invalid("batch", "writer thread", "panicked; please report"))?
+        let panicked = |what| Error::invalid("batch", what, "panicked; please report");
+        for encoder in encoders {
+            encoder.join().map_err(|_| panicked("encoder thread"))?;
+        }
+        writer.join().map_err(|_| panicked("writer thread"))?
     });
     observer.finish();
     let (manifest, tiles, counts) = result?;
@@ -275,11 +299,12 @@ fn render_job(
 
 type WriterResult = (Manifest, BTreeMap<usize, Tile>, (usize, usize, usize));
 
-/// The writer thread: encode + write, manifest row, tile, progress; the manifest is saved after
-/// every job so a killed run can resume. A manifest that cannot be saved (a full disk) is retried
-/// after the next job and must be saved at the end.
+/// The writer thread: in job order, the manifest row, the tile and the progress of each job the
+/// encoders finished; the manifest is saved after every job so a killed run can resume. A
+/// manifest that cannot be saved (a full disk) is retried after the next job and must be saved
+/// at the end.
 fn write_loop(
-    receiver: mpsc::Receiver<Message>,
+    receiver: mpsc::Receiver<(usize, Written)>,
     mut manifest: Manifest,
     observer: &dyn BatchObserver,
     sink: &dyn OutputSink,
@@ -287,17 +312,12 @@ fn write_loop(
     let mut tiles = BTreeMap::new();
     let (mut rendered, mut skipped, mut failed) = (0, 0, 0);
     let mut manifest_warned = false;
-    for message in receiver {
-        let (mut row, image) = match message {
-            Message::Render {
-                row,
-                path,
-                image,
-                png,
-            } => match write_image(sink, &path, &image, &png) {
-                Ok(()) => {
+    in_order(receiver, |written| {
+        let (mut row, image) = match written {
+            Written::Rendered { row, result } => match result {
+                Ok(thumbnail) => {
                     rendered += 1;
-                    (row, Some(Thumbnail::from_hdr(&image, &png)))
+                    (row, Some(thumbnail))
                 }
                 Err(e) => {
                     observer.line(&format!("error: job {}: {e}", row.job));
@@ -308,11 +328,11 @@ fn write_loop(
                     (row, None)
                 }
             },
-            Message::Skipped { row, path } => {
+            Written::Skipped { row, thumbnail } => {
                 skipped += 1;
-                (row, thumbnail_from_file(&path))
+                (row, thumbnail)
             }
-            Message::Failed { row } => (row, None),
+            Written::Failed { row } => (row, None),
         };
         if row.status != STATUS_OK {
             failed += 1;
@@ -340,13 +360,13 @@ fn write_loop(
             }
         }
         observer.job_done();
-    }
+    });
     manifest.save(sink)?;
     Ok((manifest, tiles, (rendered, skipped, failed)))
 }
 
 /// Encodes in memory (format by extension), then writes atomically through `sink`.
-fn write_image(
+pub(super) fn write_image(
     sink: &dyn OutputSink,
     path: &Path,
     image: &HdrImage,
@@ -368,7 +388,7 @@ fn short_path(path: &str) -> &str {
 }
 
 /// The tile of a job skipped on resume, read back from its output.
-fn thumbnail_from_file(path: &Path) -> Option<Thumbnail> {
+pub(super) fn thumbnail_from_file(path: &Path) -> Option<Thumbnail> {
     let bytes = std::fs::read(path).ok()?;
     match OutputFormat::from_path(path).ok()? {
         OutputFormat::Png => {

@@ -196,6 +196,9 @@ fn a_full_disk_mid_batch_fails_that_job_only_and_leaves_no_partial_file() {
         bytes: 100,
         full: AtomicBool::new(false),
     });
+    // The disk fills at one image and empties at the next one written: a sequence of writes,
+    // which one encoder keeps (several write images at once).
+    options.encoders = 1;
     let summary = run_batch(&gpu, &plan, &options).unwrap();
     assert_eq!(
         (summary.rendered, summary.failed, summary.cancelled),
@@ -223,6 +226,44 @@ fn a_full_disk_mid_batch_fails_that_job_only_and_leaves_no_partial_file() {
         (1, 5, 0)
     );
     assert_eq!(assert_consistent(&out_dir).len(), 6);
+}
+
+/// Several encoders write the same files, manifest and contact sheet as one: images finish out of
+/// order, the writer puts them back in job order.
+#[test]
+fn any_number_of_encoders_writes_the_same_files() {
+    let gpu = validated_gpu();
+    let jobs = format!("{SMALL_JOBS}\"object.0.material.m\" = [0.05, 0.1, 0.2, 0.3]\n");
+    let mut outputs = Vec::new();
+    for encoders in [1, 4] {
+        let dir = tempfile::tempdir().unwrap();
+        let plan = BatchPlan::parse(&jobs, "jobs.toml", dir.path()).unwrap();
+        let out_dir = dir.path().join("out");
+        let options = BatchOptions {
+            encoders,
+            ..BatchOptions::new(&out_dir)
+        };
+        let summary = run_batch(&gpu, &plan, &options).unwrap();
+        assert_eq!((summary.rendered, summary.failed), (24, 0), "{summary:?}");
+        assert_consistent(&out_dir);
+        let files: Vec<(String, Vec<u8>)> = file_names(&out_dir)
+            .into_iter()
+            .map(|name| {
+                let bytes = std::fs::read(out_dir.join(&name)).unwrap();
+                (name, bytes)
+            })
+            .collect();
+        outputs.push(files);
+    }
+    assert_no_validation_messages(&gpu);
+    assert_eq!(
+        outputs[0].len(),
+        24 + 2,
+        "24 images, the manifest, the contact sheet"
+    );
+    for ((name, one), (_, four)) in outputs[0].iter().zip(&outputs[1]) {
+        assert!(one == four, "{name} differs between 1 and 4 encoders");
+    }
 }
 
 #[test]

@@ -1,0 +1,204 @@
+//! The batch's encoders: images rendered by the render thread are encoded and written by several
+//! threads at once, and handed on to the writer in job order.
+//!
+//! On a GPU the render thread outruns one encoder: an NVIDIA H200 renders the 512² bench image in
+//! 7.6 ms of GPU time, while its PNG (the display transform, deflate) and file take ~20 ms of one
+//! core (BENCHMARKS.md, "NVIDIA H200"). So up to [`MAX_ENCODERS`] threads encode, as many as the
+//! machine has cores beside the render and writer threads (one on a 2-core machine, where the
+//! GPU is lavapipe on those cores and nothing is gained). The images they hold are bounded in
+//! bytes ([`InFlight`]), not in count, so that a batch of 8K images does not hold gigabytes.
+
+use std::collections::BTreeMap;
+use std::sync::{mpsc, Condvar, Mutex};
+
+use super::manifest::ManifestRow;
+use super::run::{thumbnail_from_file, write_image, Message};
+use super::sheet::Thumbnail;
+use super::sink::OutputSink;
+use crate::Result;
+
+/// The most encoder threads a batch runs.
+pub const MAX_ENCODERS: usize = 8;
+
+/// Bytes of rendered images (linear RGBA32F) the encoders may hold at once; one image is always
+/// let through, however large.
+pub const IN_FLIGHT_BYTES: u64 = 512 << 20;
+
+/// Encoder threads for this machine: its cores less the render and writer threads, 1 to
+/// [`MAX_ENCODERS`].
+pub fn encoder_count() -> usize {
+    std::thread::available_parallelism()
+        .map_or(1, |n| n.get().saturating_sub(2))
+        .clamp(1, MAX_ENCODERS)
+}
+
+/// A message with its image encoded and written (or its failure) and its tile made.
+pub(super) enum Written {
+    Rendered {
+        row: ManifestRow,
+        /// The tile, or why the file could not be written.
+        result: Result<Thumbnail>,
+    },
+    /// A job whose output was already there (its tile read back from the file, if it can be).
+    Skipped {
+        row: ManifestRow,
+        thumbnail: Option<Thumbnail>,
+    },
+    Failed {
+        row: ManifestRow,
+    },
+}
+
+/// The bytes of rendered images between the render thread and the encoders, and how many
+/// encoders are still running (with none left nothing would free them: the render thread must
+/// not wait then, its next send fails instead).
+pub(super) struct InFlight {
+    state: Mutex<(u64, usize)>,
+    freed: Condvar,
+}
+
+impl InFlight {
+    pub fn new(encoders: usize) -> Self {
+        InFlight {
+            state: Mutex::new((0, encoders)),
+            freed: Condvar::new(),
+        }
+    }
+
+    /// Waits until `bytes` more fit in [`IN_FLIGHT_BYTES`] (or nothing is held, or no encoder is
+    /// left), then holds them.
+    pub fn acquire(&self, bytes: u64) {
+        let mut state = self.state.lock().unwrap_or_else(|p| p.into_inner());
+        while state.0 > 0 && state.0 + bytes > IN_FLIGHT_BYTES && state.1 > 0 {
+            state = self.freed.wait(state).unwrap_or_else(|p| p.into_inner());
+        }
+        state.0 += bytes;
+    }
+
+    pub fn release(&self, bytes: u64) {
+        let mut state = self.state.lock().unwrap_or_else(|p| p.into_inner());
+        state.0 = state.0.saturating_sub(bytes);
+        self.freed.notify_all();
+    }
+
+    fn encoder_gone(&self) {
+        let mut state = self.state.lock().unwrap_or_else(|p| p.into_inner());
+        state.1 = state.1.saturating_sub(1);
+        self.freed.notify_all();
+    }
+}
+
+/// Tells [`InFlight`] that its encoder is gone, however it ends (a panic too).
+struct Running<'a>(&'a InFlight);
+
+impl Drop for Running<'_> {
+    fn drop(&mut self) {
+        self.0.encoder_gone();
+    }
+}
+
+/// The bytes a message holds while it waits for an encoder.
+pub(super) fn message_bytes(message: &Message) -> u64 {
+    match message {
+        Message::Render { image, .. } => image.pixels.len() as u64 * 16,
+        _ => 0,
+    }
+}
+
+/// One encoder: takes the next job's message, encodes and writes its image, sends the result
+/// (with the job's place in the run) to the writer; ends when the render thread is done or the
+/// writer is gone.
+pub(super) fn encode_loop(
+    jobs: &Mutex<mpsc::Receiver<(usize, Message)>>,
+    done: mpsc::Sender<(usize, Written)>,
+    in_flight: &InFlight,
+    sink: &dyn OutputSink,
+) {
+    let _running = Running(in_flight);
+    loop {
+        let next = jobs.lock().unwrap_or_else(|p| p.into_inner()).recv();
+        let Ok((place, message)) = next else { return };
+        let bytes = message_bytes(&message);
+        let written = match message {
+            Message::Render {
+                row,
+                path,
+                image,
+                png,
+            } => Written::Rendered {
+                row,
+                result: write_image(sink, &path, &image, &png)
+                    .map(|()| Thumbnail::from_hdr(&image, &png)),
+            },
+            Message::Skipped { row, path } => Written::Skipped {
+                row,
+                thumbnail: thumbnail_from_file(&path),
+            },
+            Message::Failed { row } => Written::Failed { row },
+        };
+        in_flight.release(bytes);
+        if done.send((place, written)).is_err() {
+            return;
+        }
+    }
+}
+
+/// Hands the encoders' results on in job order: `receive` yields them as they finish, `apply`
+/// gets them by place 0, 1, 2, …
+pub(super) fn in_order(
+    receive: impl IntoIterator<Item = (usize, Written)>,
+    mut apply: impl FnMut(Written),
+) {
+    let mut waiting = BTreeMap::new();
+    let mut next = 0;
+    for (place, written) in receive {
+        waiting.insert(place, written);
+        while let Some(written) = waiting.remove(&next) {
+            apply(written);
+            next += 1;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{in_order, InFlight, Written, IN_FLIGHT_BYTES};
+    use crate::scene::batch::manifest::ManifestRow;
+
+    fn failed(job: usize) -> Written {
+        Written::Failed {
+            row: ManifestRow {
+                job,
+                values: Vec::new(),
+                output: String::new(),
+                scene_hash: String::new(),
+                status: String::new(),
+            },
+        }
+    }
+
+    /// Results finishing in any order reach the writer by place.
+    #[test]
+    fn results_are_applied_in_job_order() {
+        let finished = [3, 0, 4, 1, 2, 7, 5, 6].map(|place| (place, failed(place)));
+        let mut applied = Vec::new();
+        in_order(finished, |w| match w {
+            Written::Failed { row } => applied.push(row.job),
+            _ => unreachable!("only failures were sent"),
+        });
+        assert_eq!(applied, (0..8).collect::<Vec<_>>());
+    }
+
+    /// One image always passes, however large; more wait for room, unless no encoder is left.
+    #[test]
+    fn in_flight_bytes_are_bounded_but_never_block_without_encoders() {
+        let in_flight = InFlight::new(1);
+        in_flight.acquire(IN_FLIGHT_BYTES * 3);
+        in_flight.release(IN_FLIGHT_BYTES * 3);
+        in_flight.acquire(IN_FLIGHT_BYTES / 2);
+        in_flight.acquire(IN_FLIGHT_BYTES / 2);
+        in_flight.encoder_gone();
+        // Over the budget with no encoder left to free it: returns at once.
+        in_flight.acquire(IN_FLIGHT_BYTES);
+    }
+}
