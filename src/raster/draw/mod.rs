@@ -476,6 +476,7 @@ fn draw_deferred(
         coverage_everywhere: environment_background,
         clear_color: scene.background.clear_color(),
         ray_traced,
+        ray_pipeline_device: gpu.info().ray_query.uses_pipeline(),
     };
     let settings = inputs.settings;
     let mut timings = inputs.stamps.map(|_| DrawTimings::default());

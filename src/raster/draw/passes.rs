@@ -67,6 +67,9 @@ pub(crate) struct DeferredPasses<'a> {
     /// The shading pass traces rays: its top-level structure was built by an earlier submit,
     /// and it writes the integral image too (the targets hold one).
     pub ray_traced: bool,
+    /// The device shades ray-traced draws in a ray-tracing pipeline: an earlier draw's may have
+    /// read these targets' G-buffer.
+    pub ray_pipeline_device: bool,
 }
 
 /// How the shading pass shades the covered pixels after its coverage draw.
@@ -245,7 +248,10 @@ fn deferred_barriers(
 ) {
     let (gbuffer_before, depth_before, output_before) = if targets.used {
         (
-            passes.gbuffer_read(),
+            match passes.ray_pipeline_device {
+                true => Access::FragmentAndRayTracingShaderRead,
+                false => Access::GraphicsShaderRead,
+            },
             Access::DepthAttachmentWrite,
             Access::TransferRead,
         )

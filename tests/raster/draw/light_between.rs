@@ -375,6 +375,50 @@ fn a_ray_tracing_pipeline_draws_what_ray_queries_draw() {
     }
 }
 
+/// One renderer, its targets and pipelines reused, on the ray-tracing pipeline path: a traced
+/// draw, a plain one, a traced one again (the shading pass's G-buffer reads move between the
+/// fragment and the ray-tracing stages, its outputs between colour attachments and storage
+/// images), validated, each the image a fresh renderer draws.
+#[test]
+fn a_ray_tracing_pipeline_renderer_alternates_traced_and_plain_draws() {
+    let Some(gpu) = ray_pipeline_gpu_or_skip() else {
+        return;
+    };
+    let (env, _) = constant_environment(&gpu);
+    let (red, black) = (material("smooth-red"), material("rough-black"));
+    let meshes = sphere_on_board();
+    let lights = lights();
+    let camera = camera_looking_down();
+    let objects = draw_objects((&meshes, &[&red, &black]));
+    let rt = RayTracing {
+        shadows: true,
+        bounces: 1,
+        rays: 2,
+        seed: 5,
+        denoise: true,
+    };
+    let settings = RenderSettings {
+        width: 48,
+        height: 40,
+        samples: 4,
+    };
+    let mut renderer = LacquerRenderer::new();
+    for traced in [Some(rt), None, Some(rt)] {
+        let scene = scene(
+            &objects,
+            (&camera, &lights),
+            (Some(&env), EnvironmentModel::Paper),
+            traced,
+        );
+        let again = renderer.render(&gpu, &scene, &settings).unwrap();
+        let fresh = LacquerRenderer::new()
+            .render(&gpu, &scene, &settings)
+            .unwrap();
+        crate::common::assert_no_validation_messages(&gpu);
+        assert!(again.pixels == fresh.pixels, "traced {}", traced.is_some());
+    }
+}
+
 /// A lone sphere under the sky: no ray it sends can meet another object, so the integral is 0
 /// and the image is the one without ray tracing.
 #[test]
