@@ -24,10 +24,24 @@ pub(crate) struct CliGpu(crate::gpu::GpuContext);
 /// Opens the GPU; where ray queries are off, says so once on stderr (which feature is missing
 /// and what to install).
 pub(crate) fn open_gpu() -> crate::Result<CliGpu> {
-    let gpu = crate::gpu::GpuContext::new(&crate::gpu::ContextOptions::from_env())?;
+    open_gpu_tracing(true)
+}
+
+/// [`open_gpu`] for work that traces rays (`traces`) or not. Without rays the device is opened
+/// without its ray-tracing extensions, and nothing is said: NVIDIA's driver holds ~140 MiB more
+/// host memory with the ray-tracing pipeline enabled, traced or not (an H200 with driver 580:
+/// 360 against 216 MB peak for the default scene at 1024² without rays; BENCHMARKS.md).
+pub(crate) fn open_gpu_tracing(traces: bool) -> crate::Result<CliGpu> {
+    let mut options = crate::gpu::ContextOptions::from_env();
+    if !traces {
+        options.ray_tracing = crate::gpu::RayTracingChoice::Off;
+    }
+    let gpu = crate::gpu::GpuContext::new(&options)?;
     static RAY_QUERY_WARNING: std::sync::Once = std::sync::Once::new();
     if let Some(warning) = gpu.info().ray_query.warning(&gpu.info().name) {
-        RAY_QUERY_WARNING.call_once(|| eprintln!("warning: {warning}"));
+        if traces {
+            RAY_QUERY_WARNING.call_once(|| eprintln!("warning: {warning}"));
+        }
     }
     Ok(CliGpu(gpu))
 }

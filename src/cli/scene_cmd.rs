@@ -130,7 +130,7 @@ fn render_and_write(
         tone_curve: scene.output.tone_curve,
     };
     png.validate()?;
-    let gpu = super::open_gpu()?;
+    let gpu = super::open_gpu_tracing(scene.render.ray_tracing_asked().is_some())?;
     let mut renderer = SceneRenderer::new(&gpu)?;
     let image = renderer.render(&gpu, scene);
     super::print_warnings(renderer.take_warnings());
