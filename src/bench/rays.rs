@@ -58,7 +58,7 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<RaysBench> {
             "bench stage rays",
             &gpu.info().name,
             format!(
-                "the device has no ray queries ({}); run the other stages with --stages",
+                "the device traces no rays ({}); run the other stages with --only",
                 gpu.info().ray_query.summary()
             ),
         ));
