@@ -351,25 +351,20 @@ fn shading_pass(
     }
     rec.end_rendering();
     if let Shading::RayPipeline(pipeline, set) = passes.shade {
-        trace_pass(
-            rec,
-            (pipeline, set),
-            [
-                &targets.attachments.output,
-                integral_or_output(targets, passes),
-            ],
-            shaded,
-        );
+        trace_pass(rec, (pipeline, set), shaded_images(targets, passes), shaded);
     }
 }
 
-/// The integral image of a ray-traced draw (the output itself otherwise: never the case where a
-/// ray-tracing pipeline shades, which traces).
-fn integral_or_output<'a>(
+/// The shading pass's outputs: the image, and the integral image where rays are traced (as
+/// `copy_out` copies them).
+fn shaded_images<'a>(
     targets: &'a DrawTargets<Deferred>,
     passes: &DeferredPasses<'_>,
-) -> &'a Image {
-    integral_of(targets, passes).map_or(&targets.attachments.output, |i| &i.image)
+) -> Vec<&'a Image> {
+    let integral = integral_of(targets, passes).map(|i| &i.image);
+    std::iter::once(&targets.attachments.output)
+        .chain(integral)
+        .collect()
 }
 
 /// shade_rt*.rgen over the strip's shaded rectangle (x, y, width, height in target pixels), after
@@ -378,7 +373,7 @@ fn integral_or_output<'a>(
 fn trace_pass(
     rec: &mut Recorder<'_>,
     (pipeline, set): (&RayTracingPipeline, &DescriptorSet),
-    images: [&Image; 2],
+    images: Vec<&Image>,
     shaded: Option<(u32, u32, u32, u32)>,
 ) {
     let storage = ImageUse::new(Access::RayTracingShaderWrite, Layout::General);

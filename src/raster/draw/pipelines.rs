@@ -37,9 +37,10 @@ const GRAPHICS_BINDINGS: [Binding; 3] = [
 
 /// The shading pass's set (coverage_body.glsl, shade_body.glsl): the frame, the Fresnel knots,
 /// the environment (its layers also as texels, for the `brdf` model), the materials, the
-/// G-buffer, and in the ray-traced pipelines (the last two bindings) the draw's top-level
-/// structure and its objects' mesh addresses.
-const SHADE_BINDINGS_TRACED: [Binding; 10] = [
+/// G-buffer; in the ray-traced pipelines the draw's top-level structure and its objects' mesh
+/// addresses; and in the ray-tracing pipeline's shading (shade_rt*.rgen) the image and the
+/// integral image it writes. Each set is a prefix of this one.
+const SHADE_BINDINGS_RAY_PIPELINE: [Binding; 12] = [
     Binding::new(FRAME_BINDING, BindingKind::UniformBuffer),
     Binding::new(FRESNEL_KNOTS_BINDING, BindingKind::UniformTexelBuffer),
     Binding::array(
@@ -54,35 +55,20 @@ const SHADE_BINDINGS_TRACED: [Binding; 10] = [
     Binding::new(ENV_LAYER_TEXELS_BINDING, BindingKind::UniformTexelBuffer),
     Binding::new(SCENE_TLAS_BINDING, BindingKind::AccelerationStructure),
     Binding::new(OBJECT_GEOMETRY_BINDING, BindingKind::StorageBuffer),
+    Binding::new(SHADED_IMAGE_BINDING, BindingKind::StorageImage),
+    Binding::new(SHADED_INTEGRAL_BINDING, BindingKind::StorageImage),
 ];
 
-/// The ray-tracing pipeline's shading (shade_rt*.rgen): [`SHADE_BINDINGS_TRACED`] and the image
-/// and integral image it writes.
-const SHADE_BINDINGS_RAY_PIPELINE: [Binding; 12] = {
-    let t = SHADE_BINDINGS_TRACED;
-    [
-        t[0],
-        t[1],
-        t[2],
-        t[3],
-        t[4],
-        t[5],
-        t[6],
-        t[7],
-        t[8],
-        t[9],
-        Binding::new(SHADED_IMAGE_BINDING, BindingKind::StorageImage),
-        Binding::new(SHADED_INTEGRAL_BINDING, BindingKind::StorageImage),
-    ]
-};
+/// The ray-traced shading pass's (shade_rt*.frag, and the coverage draw beside either path).
+const SHADE_BINDINGS_TRACED: &[Binding] = SHADE_BINDINGS_RAY_PIPELINE.split_at(10).0;
 
 /// [`SHADE_BINDINGS_TRACED`] without the acceleration structure.
-const SHADE_BINDINGS: &[Binding] = SHADE_BINDINGS_TRACED.split_at(8).0;
+const SHADE_BINDINGS: &[Binding] = SHADE_BINDINGS_RAY_PIPELINE.split_at(8).0;
 
 /// The shading pass's bindings (coverage and shade pipelines share one set).
 fn shade_bindings(ray_traced: bool) -> &'static [Binding] {
     match ray_traced {
-        true => &SHADE_BINDINGS_TRACED,
+        true => SHADE_BINDINGS_TRACED,
         false => SHADE_BINDINGS,
     }
 }

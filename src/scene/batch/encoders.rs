@@ -1,9 +1,9 @@
 //! The batch's encoders: images rendered by the render thread are encoded and written by several
 //! threads at once, and handed on to the writer in job order.
 //!
-//! On a GPU the render thread outruns one encoder: an NVIDIA H200 renders the 512² bench image in
-//! 7.6 ms of GPU time, while its PNG (the display transform, deflate) and file take ~20 ms of one
-//! core (BENCHMARKS.md, "NVIDIA H200"). So up to [`MAX_ENCODERS`] threads encode, as many as the
+//! On a GPU the render thread outruns one encoder: an NVIDIA H200 rendered the 512² bench image
+//! in 7.6 ms of GPU time, while the batch with one encoder (the display transform, deflate, the
+//! file) finished an image every 29 ms (BENCHMARKS.md, "NVIDIA H200"). So up to [`MAX_ENCODERS`] threads encode, as many as the
 //! machine has cores beside the render and writer threads (one on a 2-core machine, where the
 //! GPU is lavapipe on those cores and nothing is gained). The images they hold are bounded in
 //! bytes ([`InFlight`]), not in count, so that a batch of 8K images does not hold gigabytes.
