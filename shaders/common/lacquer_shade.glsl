@@ -104,8 +104,9 @@ vec3 one_light(LacquerParams p, vec3 position, vec3 n, vec3 v, vec2 nv2, vec3 f_
 // Radiance leaving `position` (unit normal n) towards v; `surface`: where its shadow rays start
 // (visibility.glsl; unused without RAY_TRACING). `light_choice` < 0: every light with its own
 // shadow ray; in [0, 1): one of them (`one_light`). env_samples: as `environment_light`.
+// `environment`: the environment term's share of the result (0 without an environment).
 vec3 lacquer_radiance_towards(LacquerParams p, vec3 view_blur, vec3 position, vec3 n, vec3 v,
-    RaySurface surface, float light_choice, int env_samples) {
+    RaySurface surface, float light_choice, int env_samples, out vec3 environment) {
     // Light-independent parts of f_r, once per point (see lacquer_brdf_view).
     vec2 nv2 = dot_compensated(n, v);
     vec3 f_diff = view_dependent_diffuse(p, nv2);
@@ -121,19 +122,21 @@ vec3 lacquer_radiance_towards(LacquerParams p, vec3 view_blur, vec3 position, ve
             }
         }
     }
+    environment = vec3(0.0);
     if (frame.environment.x != 0) {
-        radiance += environment_light(p, view_blur, n, v, nv2, f_diff, env_samples);
+        environment = environment_light(p, view_blur, n, v, nv2, f_diff, env_samples);
     }
-    return radiance;
+    return radiance + environment;
 }
 
 // Radiance towards the camera, `position` and `interpolated_normal` as the rasteriser
-// interpolated them at a pixel centre.
+// interpolated them at a pixel centre; `environment` as in `lacquer_radiance_towards`.
 vec3 lacquer_radiance(LacquerParams p, vec3 view_blur, vec3 position, vec3 interpolated_normal,
-    RaySurface surface) {
+    RaySurface surface, out vec3 environment) {
     vec3 n = normalize(interpolated_normal);
     vec3 v = normalize(frame.eye.xyz - position);
-    return lacquer_radiance_towards(p, view_blur, position, n, v, surface, -1.0, ENV_SAMPLES);
+    return lacquer_radiance_towards(p, view_blur, position, n, v, surface, -1.0, ENV_SAMPLES,
+        environment);
 }
 
 #endif

@@ -89,17 +89,43 @@ vec3 hidden_environment(vec3 s, float pdf, int n) {
 }
 
 // The integral at a shaded point: material p, unit normal n, view v, rays leaving from
-// `surface`; `key` the pixel's (sequence.glsl). Each ray is a path of up to `bounces`
-// reflections: at each surface y it meets it adds throughput·w·(L_o(y) − L(s)), L_o(y) the
-// lights with visibility plus the environment model at y, which is SPEC §6's recursion with one
-// sample per level. Returns the mean over the rays (rgb) and the variance of that mean's grey
-// value (r + g + b)/3 estimated from the rays' spread (w; with one ray, its square).
-vec4 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint key) {
+// `surface`; `key` the pixel's (sequence.glsl); `environment` the environment term E the point
+// already has (lacquer_radiance). Each ray is a path of up to `bounces` reflections: at each
+// surface y it meets it adds throughput·w·(L_o(y) − L(s)), L_o(y) the lights with visibility
+// plus the environment model at y, which is SPEC §6's recursion with one sample per level.
+// Returns the mean over the rays (rgb) and the variance of that mean's grey value
+// (r + g + b)/3 estimated from the rays' spread (w; with one ray, its square).
+//
+// The hidden environment. Each first-bounce ray that meets an object subtracts c_i = w_i·L(s_i),
+// an estimate of H = ∫ f_r·L(s)·hit(s)·(N·s) dω. In the `brdf` model E is ∫ f_r·L·(N·s) dω over
+// every direction (SPEC §4), so H = E − ∫ f_r·L·(1 − hit)·(N·s) dω too, estimated by the same
+// rays as E − mean of c_i·(1 − hit_i). Where most rays meet an object (inside a bowl) that one
+// has far less noise: a light box the object hides is subtracted as E has it instead of being
+// found by a few rays. Ray i takes it in the share h_i of the other rays that met an object
+// (leaving ray i out keeps h_i independent of it), i.e. adds h_i·(c_i − E) to its path. With no
+// ray meeting an object nothing changes (SPEC §6: no noise there); with all of them, H = E.
+// The limit differs from SPEC's integral by h·(E − ∫ f_r·L), the quadrature's own error where
+// the environment is hidden (that error then leaves the image there). Not in `paper`, whose E
+// is not that integral.
+vec4 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint key,
+    vec3 environment) {
     int rays = frame.light_transport.x;
     int bounces = frame.light_transport.y;
     vec3 total = vec3(0.0);
     // Σ of each ray's grey value and of its square.
     vec2 moments = vec2(0.0);
+    // The first bounce's rays: how many met an object, Σ d_i and Σ hit_i·d_i with
+    // d_i = c_i − E; and the grey sums the variance of the blend needs. A ray that met nothing
+    // has no path, so its value is h·D (D the grey of d_i): Σ D and Σ D² over those rays. One
+    // that met an object has P + h·D = Q − (1 − h)·D with Q = P + D (P the grey of its path):
+    // Σ Q, Σ Q², Σ Q·D, Σ D, Σ D² over those. Q, not P: where most rays meet an object P ≈ −D
+    // is large (a hidden light box) and P² + 2h·P·D + h²·D² would cancel in f32.
+    float hits = 0.0;
+    vec3 sum_d = vec3(0.0);
+    vec3 sum_hit_d = vec3(0.0);
+    vec2 missed = vec2(0.0);
+    vec4 met = vec4(0.0);
+    float met_d2 = 0.0;
     for (int i = 0; i < rays; ++i) {
         vec3 path = vec3(0.0);
         LacquerParams p = p0;
@@ -107,6 +133,8 @@ vec4 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
         vec3 v = v0;
         RaySurface surface = surface0;
         vec3 throughput = vec3(1.0);
+        vec3 c = vec3(0.0);
+        float hit_first = 0.0;
         for (int depth = 0; depth < bounces; ++depth) {
             vec2 nv2 = dot_compensated(n, v);
             vec3 f_diff = view_dependent_diffuse(p, nv2);
@@ -119,11 +147,17 @@ vec4 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
             }
             // The first bounce's rays share the lobe; a later bounce is one ray.
             vec3 hidden = hidden_environment(s, pdf, depth == 0 ? rays : 1);
+            if (depth == 0) {
+                c = weight * hidden;
+            }
             vec3 side = dot(s, surface.geometric_normal) < 0.0 ? -surface.geometric_normal
                                                                  : surface.geometric_normal;
             RayHit hit = trace_nearest(offset_ray_origin(surface.point, side), s);
             if (!hit.hit) {
                 break;
+            }
+            if (depth == 0) {
+                hit_first = 1.0;
             }
             vec3 position;
             vec3 normal;
@@ -136,16 +170,41 @@ vec4 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
             // One shadow ray at the hit, to one light (with shadows on; without, every light
             // unshadowed is exact already).
             float choice = SHADOWS ? light_number(key, uint(i), uint(depth)) : -1.0;
+            vec3 hit_environment;
             vec3 radiance = lacquer_radiance_towards(p, view_blur, position, n, v, surface, choice,
-                ENV_HIT_SAMPLES);
+                ENV_HIT_SAMPLES, hit_environment);
             path += throughput * weight * (radiance - hidden);
             throughput *= weight;
         }
         total += path;
         float grey = (path.r + path.g + path.b) / 3.0;
         moments += vec2(grey, grey * grey);
+        vec3 d = c - environment;
+        float grey_d = (d.r + d.g + d.b) / 3.0;
+        hits += hit_first;
+        sum_d += d;
+        sum_hit_d += hit_first * d;
+        if (hit_first > 0.0) {
+            float q = grey + grey_d;
+            met += vec4(q, q * q, q * grey_d, grey_d);
+            met_d2 += grey_d * grey_d;
+        } else {
+            missed += vec2(grey_d, grey_d * grey_d);
+        }
     }
     float n = float(max(rays, 1));
+#ifdef BRDF_ENVIRONMENT_MODEL
+    if (rays > 1 && hits > 0.0) {
+        // Σ_i h_i·d_i with h_i = (hits − hit_i)/(n − 1): h_miss for a ray that met nothing,
+        // h_met for one that met an object; and the grey moments of the rays' values.
+        float h_miss = hits / (n - 1.0);
+        float h_met = (hits - 1.0) / (n - 1.0);
+        total += h_miss * (sum_d - sum_hit_d) + h_met * sum_hit_d;
+        float g = 1.0 - h_met;
+        moments = vec2(h_miss * missed.x + met.x - g * met.w,
+            h_miss * h_miss * missed.y + met.y - 2.0 * g * met.z + g * g * met_d2);
+    }
+#endif
     return vec4(total / n, sample_variance_of_mean(moments, n));
 }
 

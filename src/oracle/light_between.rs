@@ -163,11 +163,11 @@ impl Twin<'_> {
                 let (position, normal) = self.surface_at(&hit);
                 let view = (eye - position).normalize();
                 let point = self.point(&hit, position, normal, view);
-                let mut radiance = self.radiance_towards(&point, rt.shadows, None);
+                let (mut radiance, environment) = self.radiance_towards(&point, rt.shadows, None);
                 let mut added = [0.0f32; 4];
                 if rt.bounces > 0 {
                     let key = sequence::pixel_key(x, y, rt.seed);
-                    let (estimate, variance) = self.light_between(&point, key, rt);
+                    let (estimate, variance) = self.light_between(&point, key, rt, environment);
                     let [r, g, b] = estimate.to_array();
                     added = [r as f32, g as f32, b as f32, variance as f32];
                     // As the draw: a radiance below 0 is clamped (after the integral image).
@@ -257,15 +257,20 @@ impl Twin<'_> {
 
     /// lacquer_shade.glsl's `lacquer_radiance_towards`: lights with visibility (or without,
     /// `shadows` false; one light by next-event estimation with `light_choice`) plus the
-    /// environment model.
-    fn radiance_towards(&self, point: &Point, shadows: bool, light_choice: Option<f32>) -> DVec3 {
+    /// environment model; and that environment term's share.
+    fn radiance_towards(
+        &self,
+        point: &Point,
+        shadows: bool,
+        light_choice: Option<f32>,
+    ) -> (DVec3, DVec3) {
         let object = &self.scene.objects()[point.object];
         let (n, v) = (point.normal.as_dvec3(), point.view.as_dvec3());
         let nv = n.dot(v);
         if nv.is_nan() || nv <= 0.0 {
-            return DVec3::ZERO;
+            return (DVec3::ZERO, DVec3::ZERO);
         }
-        let mut radiance = match light_choice {
+        let lights = match light_choice {
             Some(choice) => self.one_light(point, choice),
             None => self
                 .lights
@@ -274,57 +279,84 @@ impl Twin<'_> {
                 .map(|light| self.unshadowed_light(point, light))
                 .sum(),
         };
-        if let Some(env) = self.environment {
-            let c = DVec3::from(env.radiance);
-            let specular = match env.model {
-                EnvironmentModel::Paper => {
-                    DVec3::from(object.fresnel.eval(nv.min(1.0).acos().to_degrees())) * c
-                }
-                EnvironmentModel::Brdf => {
-                    DVec3::from(albedo_at(&self.albedo[point.object], nv)) * c
-                }
-            };
-            let f_diff = DVec3::from(view_dependent_diffuse(object.brdf, nv));
-            radiance += specular + f_diff * DVec3::from(env.irradiance);
-        }
-        radiance
+        let Some(env) = self.environment else {
+            return (lights, DVec3::ZERO);
+        };
+        let c = DVec3::from(env.radiance);
+        let specular = match env.model {
+            EnvironmentModel::Paper => {
+                DVec3::from(object.fresnel.eval(nv.min(1.0).acos().to_degrees())) * c
+            }
+            EnvironmentModel::Brdf => DVec3::from(albedo_at(&self.albedo[point.object], nv)) * c,
+        };
+        let f_diff = DVec3::from(view_dependent_diffuse(object.brdf, nv));
+        let environment = specular + f_diff * DVec3::from(env.irradiance);
+        (lights + environment, environment)
     }
 
     /// light_between.glsl's `light_between`: the mean over the rays and the variance of its grey
-    /// value.
-    fn light_between(&self, primary: &Point, key: u32, rt: &RayTracing) -> (DVec3, f64) {
+    /// value. `environment`: the primary point's environment term E. In the `brdf` model each
+    /// ray also adds h_i·(c_i − E), c_i its first bounce's w·L(s) and h_i the share of the other
+    /// rays whose first bounce met an object (the shader's comment derives it).
+    fn light_between(
+        &self,
+        primary: &Point,
+        key: u32,
+        rt: &RayTracing,
+        environment: DVec3,
+    ) -> (DVec3, f64) {
         let hidden = self
             .environment
             .map_or(DVec3::ZERO, |env| DVec3::from(env.radiance));
-        let mut total = DVec3::ZERO;
-        let mut moments = (0.0, 0.0);
+        let grey = |c: DVec3| (c.x + c.y + c.z) / 3.0;
+        // Per ray: its path, its first bounce's d_i = c_i − E, whether that bounce met an object.
+        let mut rays = Vec::with_capacity(rt.rays as usize);
         for i in 0..rt.rays {
             let mut path = DVec3::ZERO;
             let mut throughput = DVec3::ONE;
             let mut at = Point { ..*primary };
+            let (mut c, mut hit_first) = (DVec3::ZERO, false);
             for depth in 0..rt.bounces {
                 let u = sequence::sample_numbers(key, i, rt.rays, depth);
                 let Some((s, weight)) = self.sample_lobes(&at, u) else {
                     break;
                 };
+                if depth == 0 {
+                    c = weight * hidden;
+                }
                 let ng = at.surface.geometric_normal;
                 let side = if s.dot(ng) < 0.0 { -ng } else { ng };
                 let origin = offset_ray_origin(at.surface.point, side);
                 let Some(hit) = self.scene.bvh().intersect(origin, s, 0.0, f32::INFINITY) else {
                     break;
                 };
+                hit_first |= depth == 0;
                 let (position, normal) = self.surface_at(&hit);
                 at = self.point(&hit, position, normal, -s);
                 let choice = rt.shadows.then(|| sequence::light_number(key, i, depth));
-                let radiance = self.radiance_towards(&at, rt.shadows, choice);
+                let (radiance, _) = self.radiance_towards(&at, rt.shadows, choice);
                 path += throughput * weight * (radiance - hidden);
                 throughput *= weight;
             }
-            total += path;
-            let grey = (path.x + path.y + path.z) / 3.0;
-            moments = (moments.0 + grey, moments.1 + grey * grey);
+            rays.push((path, c - environment, hit_first));
         }
         let n = f64::from(rt.rays.max(1));
+        let hits = rays.iter().filter(|ray| ray.2).count() as f64;
+        let blend = self
+            .environment
+            .is_some_and(|env| env.model == EnvironmentModel::Brdf)
+            && rt.rays > 1
+            && hits > 0.0;
+        let (mut total, mut moments) = (DVec3::ZERO, (0.0, 0.0));
+        for &(path, d, hit) in &rays {
+            let share = match blend {
+                true => (hits - f64::from(u8::from(hit))) / (n - 1.0),
+                false => 0.0,
+            };
+            let value = path + share * d;
+            total += value;
+            moments = (moments.0 + grey(value), moments.1 + grey(value).powi(2));
+        }
         (total / n, sample_variance_of_mean(moments, n))
     }
 
