@@ -87,14 +87,6 @@ impl DeferredPasses<'_> {
         matches!(self.shade, Shading::RayPipeline(..))
     }
 
-    /// The shading pass's reads of the G-buffer.
-    fn gbuffer_read(&self) -> Access {
-        match self.ray_pipeline() {
-            true => Access::FragmentAndRayTracingShaderRead,
-            false => Access::GraphicsShaderRead,
-        }
-    }
-
     /// The last use of the shading pass's outputs before the copy-out.
     fn shaded_use(&self) -> ImageUse {
         match self.ray_pipeline() {
@@ -238,6 +230,15 @@ fn integral_of<'a>(
         .filter(|_| passes.ray_traced)
 }
 
+/// The shading pass's reads of the G-buffer: the coverage and fragment shading passes', and
+/// with `ray_pipeline` the ray-tracing pipeline's too.
+fn gbuffer_read(ray_pipeline: bool) -> Access {
+    match ray_pipeline {
+        true => Access::FragmentAndRayTracingShaderRead,
+        false => Access::GraphicsShaderRead,
+    }
+}
+
 /// First use: nothing to wait for. Reuse: the previous strip's or draw's shading pass read the
 /// G-buffer, its depth tests wrote both depth targets and its copy read the output (and the
 /// integral image) and wrote the readback buffer (and the integral's).
@@ -248,10 +249,7 @@ fn deferred_barriers(
 ) {
     let (gbuffer_before, depth_before, output_before) = if targets.used {
         (
-            match passes.ray_pipeline_device {
-                true => Access::FragmentAndRayTracingShaderRead,
-                false => Access::GraphicsShaderRead,
-            },
+            gbuffer_read(passes.ray_pipeline_device),
             Access::DepthAttachmentWrite,
             Access::TransferRead,
         )
@@ -303,7 +301,7 @@ fn gbuffer_pass(
     set_strip_viewport(rec, strip);
     draw_objects(rec, passes.gbuffer, passes.objects);
     rec.end_rendering();
-    let read = ImageUse::new(passes.gbuffer_read(), Layout::ShaderRead);
+    let read = ImageUse::new(gbuffer_read(passes.ray_pipeline()), Layout::ShaderRead);
     for image in gbuffer {
         rec.image_barrier(image, COLOR_ATTACHMENT, read);
     }
