@@ -252,6 +252,26 @@ fn bad_cli_values_fail_cleanly() {
     }
 }
 
+/// An error that quotes its cause (`cannot read PATH: CAUSE`) says the cause once, not again as
+/// a `caused by:` line.
+#[test]
+fn a_missing_environment_names_its_cause_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = [
+        "render",
+        "-o",
+        "x.png",
+        "--size",
+        "8x8",
+        "--env",
+        "absent.hdr",
+    ];
+    assert_fails(dir.path(), &args, "x.png", &["absent.hdr"]);
+    let err = stderr(&shikki(dir.path(), &args));
+    assert!(!err.contains("caused by"), "{err}");
+    assert_eq!(err.matches("os error").count(), 1, "{err}");
+}
+
 #[test]
 fn brdf_command_cpu_and_gpu_agree_and_print_nine_digits() {
     let dir = tempfile::tempdir().unwrap();
