@@ -88,30 +88,43 @@ vec3 one_light(LacquerParams p, vec3 position, vec3 n, vec3 v, vec2 nv2, vec3 f_
     if (!(total > 0.0)) {
         return vec3(0.0);
     }
+    // The choice first, the shadow ray after the loop: one query for every lane, whichever light
+    // it chose (a query inside the loop would run once per light under llvmpipe's lane masks).
     float target = choice * total;
     float below = 0.0;
+    int chosen = -1;
+    vec3 chosen_c = vec3(0.0);
     for (int i = 0; i < frame.light_count.x; ++i) {
         vec3 c = unshadowed_light(p, i, position, n, v, nv2, f_diff);
         float w = c.r + c.g + c.b;
         below += w;
-        if (w > 0.0 && (target < below || i == frame.light_count.x - 1)) {
-            return c * (light_visibility(surface, frame.light_vector[i]) * (total / w));
+        if (chosen < 0 && w > 0.0 && (target < below || i == frame.light_count.x - 1)) {
+            chosen = i;
+            chosen_c = c;
         }
     }
-    return vec3(0.0);
+    if (chosen < 0) {
+        return vec3(0.0);
+    }
+    float w = chosen_c.r + chosen_c.g + chosen_c.b;
+    return chosen_c * (light_visibility(surface, frame.light_vector[chosen]) * (total / w));
 }
 
 // Radiance leaving `position` (unit normal n) towards v; `surface`: where its shadow rays start
-// (visibility.glsl; unused without RAY_TRACING). `light_choice` < 0: every light with its own
-// shadow ray; in [0, 1): one of them (`one_light`). env_samples: as `environment_light`.
-// `environment`: the environment term's share of the result (0 without an environment).
+// (visibility.glsl; unused without RAY_TRACING). `next_event` false: every light with its own
+// shadow ray; true: one of them (`one_light`), chosen by `light_choice` in [0, 1). Callers pass
+// a constant for `next_event`, so each pipeline keeps one side of the branch: llvmpipe would run
+// both, and each side traces (quirk `loop_body_runs_when_no_lane_enters`). env_samples: as
+// `environment_light`. `environment`: the environment term's share of the result (0 without an
+// environment).
 vec3 lacquer_radiance_towards(LacquerParams p, vec3 view_blur, vec3 position, vec3 n, vec3 v,
-    RaySurface surface, float light_choice, int env_samples, out vec3 environment) {
+    RaySurface surface, bool next_event, float light_choice, int env_samples,
+    out vec3 environment) {
     // Light-independent parts of f_r, once per point (see lacquer_brdf_view).
     vec2 nv2 = dot_compensated(n, v);
     vec3 f_diff = view_dependent_diffuse(p, nv2);
     vec3 radiance = vec3(0.0);
-    if (light_choice >= 0.0) {
+    if (next_event) {
         radiance += one_light(p, position, n, v, nv2, f_diff, surface, light_choice);
     } else {
         for (int i = 0; i < frame.light_count.x; ++i) {
@@ -135,8 +148,8 @@ vec3 lacquer_radiance(LacquerParams p, vec3 view_blur, vec3 position, vec3 inter
     RaySurface surface, out vec3 environment) {
     vec3 n = normalize(interpolated_normal);
     vec3 v = normalize(frame.eye.xyz - position);
-    return lacquer_radiance_towards(p, view_blur, position, n, v, surface, -1.0, ENV_SAMPLES,
-        environment);
+    return lacquer_radiance_towards(p, view_blur, position, n, v, surface, false, 0.0,
+        ENV_SAMPLES, environment);
 }
 
 #endif

@@ -169,10 +169,11 @@ vec4 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
             v = -s;
             // One shadow ray at the hit, to one light (with shadows on; without, every light
             // unshadowed is exact already).
-            float choice = SHADOWS ? light_number(key, uint(i), uint(depth)) : -1.0;
+            // SHADOWS is a specialization constant: the pipeline keeps one side.
+            float choice = SHADOWS ? light_number(key, uint(i), uint(depth)) : 0.0;
             vec3 hit_environment;
-            vec3 radiance = lacquer_radiance_towards(p, view_blur, position, n, v, surface, choice,
-                ENV_HIT_SAMPLES, hit_environment);
+            vec3 radiance = lacquer_radiance_towards(p, view_blur, position, n, v, surface,
+                SHADOWS, choice, ENV_HIT_SAMPLES, hit_environment);
             path += throughput * weight * (radiance - hidden);
             throughput *= weight;
         }

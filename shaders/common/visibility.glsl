@@ -119,12 +119,13 @@ float light_visibility(RaySurface surface, vec4 light_vector) {
     vec3 side = dot(towards, surface.geometric_normal) < 0.0 ? -surface.geometric_normal
                                                               : surface.geometric_normal;
     vec3 origin = offset_ray_origin(surface.point, side);
-    if (light_vector.w == 0.0) {
-        return unoccluded(origin, normalize(light_vector.xyz), RAY_FAR) ? 1.0 : 0.0;
-    }
+    // One query for either kind of light: llvmpipe runs both sides of a branch, and a query on
+    // each side would cost two traversal loops (quirk `loop_body_runs_when_no_lane_enters`).
     vec3 to_light = light_vector.xyz - origin;
     float distance = length(to_light);
-    return unoccluded(origin, to_light / distance, distance) ? 1.0 : 0.0;
+    bool directional = light_vector.w == 0.0;
+    vec3 direction = directional ? normalize(light_vector.xyz) : to_light / distance;
+    return unoccluded(origin, direction, directional ? RAY_FAR : distance) ? 1.0 : 0.0;
 #else
     return 1.0;
 #endif
