@@ -230,7 +230,7 @@ fn prefilter(args: PrefilterArgs) -> Result<()> {
         path: args.output.clone(),
         message: format!("cannot create the output directory: {e}"),
     })?;
-    let gpu = super::open_gpu()?;
+    let gpu = super::open_gpu_tracing(false)?;
     if args.face_size.is_none() {
         params.face_size = default_params(&gpu, loaded.image.width).face_size;
     }
@@ -278,7 +278,7 @@ fn brdf(args: BrdfArgs) -> Result<()> {
             .map(|[n, v, l]| lacquer_brdf(&params, &fresnel, *n, *v, *l))
             .collect(),
         Backend::Gpu => {
-            let gpu = super::open_gpu()?;
+            let gpu = super::open_gpu_tracing(false)?;
             let evaluator = BrdfEvaluator::new(&gpu)?;
             let values = evaluator.evaluate(&gpu, &params, &fresnel, &rows)?;
             gpu.check_validation()?;

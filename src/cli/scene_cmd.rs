@@ -152,7 +152,7 @@ pub const EXIT_INTERRUPTED: i32 = 130;
 pub fn run_batch(args: BatchArgs) -> Result<()> {
     let plan = BatchPlan::load(&args.jobs)?;
     let shard = args.shard.unwrap_or((0, 1));
-    let gpu = super::open_gpu()?;
+    let gpu = super::open_gpu_tracing(plan.may_trace())?;
     let mut options = BatchOptions::new(args.out.clone());
     options.shard = shard;
     options.force = args.force;

@@ -175,6 +175,18 @@ impl BatchPlan {
         self.sweeps.iter().map(|s| s.values.len()).product()
     }
 
+    /// Whether some job may trace rays: the base scene does, or a sweep sets a `render` key
+    /// (conservative: `render.size` counts too). A base scene that does not build counts as
+    /// tracing; its jobs fail on their own. Without rays the batch opens the device without its
+    /// ray-tracing extensions (memory on NVIDIA's driver, `cli::open_gpu_tracing`).
+    pub fn may_trace(&self) -> bool {
+        self.sweeps.iter().any(|s| s.path.starts_with("render."))
+            || self
+                .base
+                .build()
+                .map_or(true, |scene| scene.render.ray_tracing_asked().is_some())
+    }
+
     /// Every job, in id order; the first sweep varies slowest.
     pub fn jobs(&self) -> Vec<JobSpec> {
         (0..self.job_count()).map(|id| self.job(id)).collect()
@@ -351,6 +363,30 @@ mod tests {
         let job = plan.prepare(&plan.job(4)).unwrap();
         assert_eq!(job.scene.objects[0].material.lacquer_ratio, 2.0);
         assert_eq!(job.scene.objects[0].material.beckmann_m, 0.20);
+    }
+
+    #[test]
+    fn a_batch_may_trace_unless_its_base_does_not_and_no_sweep_sets_a_render_key() {
+        let plan = |render: &str, sweep: &str| {
+            let text = format!(
+                "[scene]\n[scene.render]\n{render}\n[[scene.object]]\nmesh = \"builtin:sphere\"\n\
+                 [sweep]\n\"object.0.material.r\" = [1, 2]\n{sweep}"
+            );
+            BatchPlan::parse(&text, "jobs.toml", Path::new(".")).unwrap()
+        };
+        assert!(plan("", "").may_trace(), "ray tracing is on by default");
+        assert!(!plan("ray_tracing = false", "").may_trace());
+        assert!(!plan("shadows = false\nbounces = 0", "").may_trace());
+        assert!(plan(
+            "ray_tracing = false",
+            "\"render.ray_tracing\" = [false, true]"
+        )
+        .may_trace());
+        assert!(plan(
+            "shadows = false\nbounces = 0",
+            "\"render.bounces\" = [0, 1]"
+        )
+        .may_trace());
     }
 
     #[test]
