@@ -142,6 +142,30 @@ vec3 lacquer_radiance_towards(LacquerParams p, vec3 view_blur, vec3 position, ve
     return radiance + environment;
 }
 
+#ifdef RAY_TRACING
+// The environment term the light between objects' control variate takes (light_between.glsl):
+// ∫ f_r·L·(N·s) dω over every direction, at unit n, v. In `brdf` that is the model's own term,
+// `environment` (what lacquer_radiance_towards gave). `paper`'s term is not that integral, so
+// the `brdf` model's quadrature stands in for it, on the bright split of `paper`'s layers (the
+// renderer attaches one to the environment of a `paper` draw that estimates the integral,
+// EnvironmentPreparer::attach_bright; a map uploaded without one is read whole): the variate
+// then adds h·(this − the integral), the quadrature's error where the environment is hidden.
+vec3 integral_environment(LacquerParams p, vec3 n, vec3 v, vec3 environment) {
+#ifdef BRDF_ENVIRONMENT_MODEL
+    return environment;
+#else
+    vec2 nv2 = dot_compensated(n, v);
+    float nv = nv2.x + nv2.y;
+    if (frame.environment.x == 0 || nv <= 0.0) {
+        return vec3(0.0);
+    }
+    vec3 f_diff = view_dependent_diffuse(p, nv2);
+    return brdf_environment_specular(p, n, v, nv, ENV_SAMPLES)
+        + f_diff * textureLod(env_irradiance, n, 0.0).rgb;
+#endif
+}
+#endif
+
 // Radiance towards the camera, `position` and `interpolated_normal` as the rasteriser
 // interpolated them at a pixel centre; `environment` as in `lacquer_radiance_towards`.
 vec3 lacquer_radiance(LacquerParams p, vec3 view_blur, vec3 position, vec3 interpolated_normal,

@@ -89,24 +89,25 @@ vec3 hidden_environment(vec3 s, float pdf, int n) {
 }
 
 // The integral at a shaded point: material p, unit normal n, view v, rays leaving from
-// `surface`; `key` the pixel's (sequence.glsl); `environment` the environment term E the point
-// already has (lacquer_radiance). Each ray is a path of up to `bounces` reflections: at each
-// surface y it meets it adds throughput·w·(L_o(y) − L(s)), L_o(y) the lights with visibility
-// plus the environment model at y, which is SPEC §6's recursion with one sample per level.
+// `surface`; `key` the pixel's (sequence.glsl); `environment` E, the integral of f_r·L over
+// every direction at the point (`integral_environment`). Each ray is a path of up to `bounces`
+// reflections: at each surface y it meets it adds throughput·w·(L_o(y) − L(s)), L_o(y) the
+// lights with visibility plus the environment model at y, which is SPEC §6's recursion with one
+// sample per level.
 // Returns the mean over the rays (rgb) and the variance of that mean's grey value
 // (r + g + b)/3 estimated from the rays' spread (w; with one ray, its square).
 //
 // The hidden environment. Each first-bounce ray that meets an object subtracts c_i = w_i·L(s_i),
-// an estimate of H = ∫ f_r·L(s)·hit(s)·(N·s) dω. In the `brdf` model E is ∫ f_r·L·(N·s) dω over
-// every direction (SPEC §4), so H = E − ∫ f_r·L·(1 − hit)·(N·s) dω too, estimated by the same
-// rays as E − mean of c_i·(1 − hit_i). Where most rays meet an object (inside a bowl) that one
-// has far less noise: a light box the object hides is subtracted as E has it instead of being
-// found by a few rays. Ray i takes it in the share h_i of the other rays that met an object
-// (leaving ray i out keeps h_i independent of it), i.e. adds h_i·(c_i − E) to its path. With no
-// ray meeting an object nothing changes (SPEC §6: no noise there); with all of them, H = E.
+// an estimate of H = ∫ f_r·L(s)·hit(s)·(N·s) dω. E is ∫ f_r·L·(N·s) dω over every direction
+// (the `brdf` model's term, SPEC §4), so H = E − ∫ f_r·L·(1 − hit)·(N·s) dω too, estimated by
+// the same rays as E − mean of c_i·(1 − hit_i). Where most rays meet an object (inside a bowl)
+// that one has far less noise: a light box the object hides is subtracted as E has it instead
+// of being found by a few rays. Ray i takes it in the share h_i of the other rays that met an
+// object (leaving ray i out keeps h_i independent of it), i.e. adds h_i·(c_i − E) to its path.
+// With no ray meeting an object nothing changes (SPEC §6: no noise there); with all of them,
+// H = E.
 // The limit differs from SPEC's integral by h·(E − ∫ f_r·L), the quadrature's own error where
-// the environment is hidden (that error then leaves the image there). Not in `paper`, whose E
-// is not that integral.
+// the environment is hidden (in `brdf` that error then leaves the image there).
 vec4 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint key,
     vec3 environment) {
     int rays = frame.light_transport.x;
@@ -194,7 +195,6 @@ vec4 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
         }
     }
     float n = float(max(rays, 1));
-#ifdef BRDF_ENVIRONMENT_MODEL
     if (rays > 1 && hits > 0.0) {
         // Σ_i h_i·d_i with h_i = (hits − hit_i)/(n − 1): h_miss for a ray that met nothing,
         // h_met for one that met an object; and the grey moments of the rays' values.
@@ -205,7 +205,6 @@ vec4 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
         moments = vec2(h_miss * missed.x + met.x - g * met.w,
             h_miss * h_miss * missed.y + met.y - 2.0 * g * met.z + g * g * met_d2);
     }
-#endif
     return vec4(total / n, sample_variance_of_mean(moments, n));
 }
 

@@ -54,13 +54,14 @@ vec3 shade_object(int object, vec3 position, vec4 normal, uint key, out vec4 int
     RaySurface surface = ray_surface(object, int(normal.w), position, n);
     vec3 environment;
     vec3 radiance = lacquer_radiance(p, view_blur, position, normal.xyz, surface, environment);
-    if (frame.light_transport.y > 0) {
+    if (INTEGRAL && frame.light_transport.y > 0) {
         vec3 v = normalize(frame.eye.xyz - position);
         // Unclamped: the integral's estimate can exceed what the environment gave (few rays,
         // most of them hiding a bright sky), but the clamp at 0 of the radiance it estimates is
         // the host's, after the denoise: a noisy estimate clamped pixel by pixel is biased
         // upwards where the radiance is near 0 (a black bowl mirrored in a black tray).
-        integral = light_between(p, n, v, surface, key, environment);
+        integral = light_between(p, n, v, surface, key, integral_environment(p, n, v,
+            environment));
         radiance += integral.rgb;
     }
     return radiance;

@@ -17,6 +17,9 @@ layout(set = 0, binding = SCENE_TLAS_BINDING) uniform accelerationStructureEXT s
 // Shadow rays to the lights (else every light is seen; the pass may still trace for §6's
 // integral).
 layout(constant_id = SHADOWS_ID) const bool SHADOWS = true;
+// SPEC §6's integral (bounces ≥ 1), else shadow rays alone: light_between.glsl's code is folded
+// away.
+layout(constant_id = INTEGRAL_ID) const bool INTEGRAL = true;
 
 // Far enough for a directional light ("to infinity") and finite for every implementation.
 const float RAY_FAR = 1e30;

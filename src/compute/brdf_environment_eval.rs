@@ -53,6 +53,7 @@ pub fn brdf_environment_specular_gpu(
         env_samples: BRDF_SAMPLES,
         env_hit_samples: BRDF_HIT_SAMPLES,
         shadows: 0,
+        integral: 0,
     };
     let pipeline: ComputePipeline = gpu.create_specialized_compute_pipeline(
         "brdf_environment_eval.comp",

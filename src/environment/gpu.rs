@@ -211,6 +211,11 @@ impl GpuEnvironment {
         Ok(())
     }
 
+    /// Whether a bright split is attached.
+    pub fn has_bright(&self) -> bool {
+        self.bright.get().is_some()
+    }
+
     /// What the `brdf` model's lookups read and the lights it adds: the attached splits'
     /// residuals and lights, or without them this map itself for both and no lights (an
     /// environment uploaded by hand, as tests do).

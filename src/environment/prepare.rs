@@ -133,9 +133,27 @@ impl EnvironmentPreparer {
         let params = model_params(gpu, loaded.image.width, model);
         let env = self.prepare_image(gpu, &loaded.image, (light, &params), warnings)?;
         if model == EnvironmentModel::Brdf {
-            env.attach_bright(self.bright_of(gpu, &loaded.image, light, warnings)?)?;
+            env.attach_bright(self.bright_of(gpu, &loaded.image, (light, model), warnings)?)?;
         }
         Ok(env)
+    }
+
+    /// Attaches to `env` (`source` prepared for `model`) its bright split, prefiltered with the
+    /// same layers, unless it has one: a ray-traced `paper` draw reads it through the `brdf`
+    /// model's quadrature for the light between objects' control variate (lacquer_shade.glsl's
+    /// `integral_environment`). A `brdf` environment has one already.
+    pub fn attach_bright(
+        &mut self,
+        gpu: &GpuContext,
+        (source, env): (&EnvironmentSource, &GpuEnvironment),
+        (light, model): (EnvironmentLight, EnvironmentModel),
+        warnings: &mut Vec<Warning>,
+    ) -> Result<()> {
+        if env.has_bright() {
+            return Ok(());
+        }
+        let loaded = source.load()?;
+        env.attach_bright(self.bright_of(gpu, &loaded.image, (light, model), warnings)?)
     }
 
     /// The `brdf` model's sources for `source` (bright.rs): the map's bright parts as lights in
@@ -149,17 +167,23 @@ impl EnvironmentPreparer {
         warnings: &mut Vec<Warning>,
     ) -> Result<BrightEnvironment> {
         let loaded = source.load()?;
-        self.bright_of(gpu, &loaded.image, light, warnings)
+        self.bright_of(
+            gpu,
+            &loaded.image,
+            (light, EnvironmentModel::Brdf),
+            warnings,
+        )
     }
 
+    /// The bright splits of `image` with their residuals prefiltered as `model` prefilters a map.
     fn bright_of(
         &mut self,
         gpu: &GpuContext,
         image: &Equirect,
-        light: EnvironmentLight,
+        (light, model): (EnvironmentLight, EnvironmentModel),
         warnings: &mut Vec<Warning>,
     ) -> Result<BrightEnvironment> {
-        let params = model_params(gpu, image.width, EnvironmentModel::Brdf);
+        let params = model_params(gpu, image.width, model);
         let mut part = |split: BrightSplit| -> Result<(GpuEnvironment, Vec<BrightLight>, f64)> {
             let lights = split.lights_in_world(light);
             let residual = self.prepare_image(gpu, &split.residual, (light, &params), warnings)?;

@@ -9,7 +9,8 @@
 //! footprint, have exact values the twin can state without the GPU's cube filtering: `paper` gives
 //! F(acos nv)·c, `brdf` gives A(nv)·c from the albedo knots the draw uses; the diffuse half is
 //! f_diff·E_irr, E_irr the irradiance the caller passes (the GPU's irradiance cube holds π·c to
-//! its quadrature's accuracy).
+//! its quadrature's accuracy). The control variate of the hidden environment takes the `brdf`
+//! model's value in either model.
 
 use glam::{DVec3, Vec3};
 
@@ -122,7 +123,7 @@ pub struct Twin<'a> {
     pub scene: &'a TracedScene<'a>,
     pub lights: &'a [Light],
     pub environment: Option<ConstantEnvironment>,
-    /// Per object, for the `brdf` model.
+    /// Per object: the `brdf` model's A(nv), read in either model by the control variate.
     pub albedo: &'a [AlbedoKnots],
 }
 
@@ -167,6 +168,7 @@ impl Twin<'_> {
                 let mut added = [0.0f32; 4];
                 if rt.bounces > 0 {
                     let key = sequence::pixel_key(x, y, rt.seed);
+                    let environment = self.integral_environment(&point, environment);
                     let (estimate, variance) = self.light_between(&point, key, rt, environment);
                     let [r, g, b] = estimate.to_array();
                     added = [r as f32, g as f32, b as f32, variance as f32];
@@ -294,10 +296,33 @@ impl Twin<'_> {
         (lights + environment, environment)
     }
 
+    /// lacquer_shade.glsl's `integral_environment`: ∫ f_r·L·(N·s) dω over every direction at the
+    /// point, the control variate's E. In `brdf` the model's term (`environment`); in `paper`
+    /// the `brdf` model's quadrature, which a constant sky makes A(nv)·c (the quadrature is
+    /// normalised by A) plus the diffuse half.
+    fn integral_environment(&self, point: &Point, environment: DVec3) -> DVec3 {
+        let Some(env) = self.environment else {
+            return DVec3::ZERO;
+        };
+        if env.model == EnvironmentModel::Brdf {
+            return environment;
+        }
+        let object = &self.scene.objects()[point.object];
+        let nv = point.normal.as_dvec3().dot(point.view.as_dvec3());
+        if nv.is_nan() || nv <= 0.0 {
+            return DVec3::ZERO;
+        }
+        let c = DVec3::from(env.radiance);
+        let specular = DVec3::from(albedo_at(&self.albedo[point.object], nv)) * c;
+        let f_diff = DVec3::from(view_dependent_diffuse(object.brdf, nv));
+        specular + f_diff * DVec3::from(env.irradiance)
+    }
+
     /// light_between.glsl's `light_between`: the mean over the rays and the variance of its grey
-    /// value. `environment`: the primary point's environment term E. In the `brdf` model each
-    /// ray also adds h_i·(c_i − E), c_i its first bounce's w·L(s) and h_i the share of the other
-    /// rays whose first bounce met an object (the shader's comment derives it).
+    /// value. `environment`: the primary point's
+    /// [`integral_environment`](Self::integral_environment) E. Each ray also adds h_i·(c_i − E),
+    /// c_i its first bounce's w·L(s) and h_i the share of the other rays whose first bounce met
+    /// an object (the shader's comment derives it).
     fn light_between(
         &self,
         primary: &Point,
@@ -342,11 +367,7 @@ impl Twin<'_> {
         }
         let n = f64::from(rt.rays.max(1));
         let hits = rays.iter().filter(|ray| ray.2).count() as f64;
-        let blend = self
-            .environment
-            .is_some_and(|env| env.model == EnvironmentModel::Brdf)
-            && rt.rays > 1
-            && hits > 0.0;
+        let blend = rt.rays > 1 && hits > 0.0;
         let (mut total, mut moments) = (DVec3::ZERO, (0.0, 0.0));
         for &(path, d, hit) in &rays {
             let share = match blend {

@@ -146,7 +146,12 @@ impl SceneRenderer {
             ));
         }
         let model = scene.render.environment_model;
-        let env_index = self.environment(gpu, &scene.environment, model)?;
+        // The light between objects' control variate reads the bright split in either model.
+        let integral = scene
+            .render
+            .ray_tracing_on(gpu)
+            .is_some_and(|rt| rt.bounces > 0);
+        let env_index = self.environment(gpu, &scene.environment, (model, integral))?;
         let objects: Vec<DrawObject> = meshes
             .iter()
             .zip(&shading)
@@ -265,12 +270,14 @@ impl SceneRenderer {
         Ok(mesh)
     }
 
-    /// Index of the prefiltered environment in the cache, prepared on first use.
+    /// Index of the prefiltered environment in the cache, prepared on first use; for a draw
+    /// that estimates SPEC §6's integral (`integral`), with its bright split
+    /// (`EnvironmentPreparer::attach_bright`).
     fn environment(
         &mut self,
         gpu: &GpuContext,
         spec: &EnvironmentSpec,
-        model: EnvironmentModel,
+        (model, integral): (EnvironmentModel, bool),
     ) -> Result<Option<usize>> {
         let EnvironmentSpec::Map { source, light } = spec else {
             return Ok(None);
@@ -280,6 +287,11 @@ impl SceneRenderer {
             .iter()
             .position(|c| c.source.is(source) && c.light.same_bits(light) && c.model == model)
         {
+            if integral {
+                let env = &self.environments[k].prefiltered;
+                let context = (*light, model);
+                (self.preparer).attach_bright(gpu, (source, env), context, &mut self.warnings)?;
+            }
             return Ok(Some(k));
         }
         // Room first: the old cube's memory is free before the new one is made.
@@ -287,6 +299,11 @@ impl SceneRenderer {
         let prefiltered =
             self.preparer
                 .prepare(gpu, source, (*light, model), &mut self.warnings)?;
+        if integral {
+            let context = (*light, model);
+            let env = (source, &prefiltered);
+            (self.preparer).attach_bright(gpu, env, context, &mut self.warnings)?;
+        }
         self.environments.push(CachedEnvironment {
             source: source.clone(),
             light: *light,

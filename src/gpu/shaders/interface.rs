@@ -134,6 +134,9 @@ shader_interface! {
             /// The ray-traced shading pass traces shadow rays to the lights (`SHADOWS`, a
             /// VkBool32; SPEC §6's vis, else 1).
             shadows,
+            /// ... and estimates SPEC §6's integral (`INTEGRAL`, a VkBool32: bounces ≥ 1), so a
+            /// shadows-only pipeline keeps none of its code (llvmpipe runs a branch no lane takes).
+            integral,
         }
     }
 

@@ -14,7 +14,6 @@ use crate::environment::bright::BrightLight;
 use crate::environment::gpu::{layer_texel_offsets, BrdfLights, GpuEnvironment};
 use crate::environment::light_bins::light_bin_texels;
 use crate::environment::params::ViewBlur;
-use crate::environment::EnvironmentModel;
 use crate::gpu::shaders::interface::{
     Frame, ObjectMaterial, MAX_ENV_LAYERS, MAX_ENV_LIGHTS, MAX_LIGHTS, ROUGH_MAX_ENV_LIGHTS,
 };
@@ -356,10 +355,9 @@ impl DrawBuffers {
         environment: &GpuEnvironment,
         (object_knots, object_albedo, scene_radius): (&[Knots], &[Knots], f64),
     ) -> Result<Frame> {
-        let brdf_lights = match scene.environment_model {
-            EnvironmentModel::Brdf => Some(environment.brdf_lights()),
-            EnvironmentModel::Paper => None,
-        };
+        let brdf_lights = scene
+            .reads_brdf_quadrature()
+            .then(|| environment.brdf_lights());
         let mut knots: Vec<[f32; 4]> = Vec::new();
         let mut materials: Vec<ObjectMaterial> = Vec::new();
         for (i, (object, object_knots)) in scene.objects.iter().zip(object_knots).enumerate() {

@@ -50,7 +50,7 @@ pub use types::{
 
 use crate::environment::brdf_quadrature::AlbedoCache;
 use crate::environment::gpu::GpuEnvironment;
-use crate::environment::{CubeImage, EnvironmentModel, PrefilteredEnvironment};
+use crate::environment::{CubeImage, PrefilteredEnvironment};
 use crate::gpu::shaders::interface::Frame;
 use crate::gpu::{
     AccelerationStructure, Buffer, BufferUsage, DescriptorSet, GpuContext, GraphicsPipeline,
@@ -259,14 +259,15 @@ impl LacquerRenderer {
             .iter()
             .map(|o| o.mesh.bounding_radius())
             .fold(0.0, f64::max);
-        // The `brdf` model normalises by each object's directional albedo A(nv).
-        let albedo: Vec<Vec<[f32; 4]>> = match scene.environment_model {
-            EnvironmentModel::Brdf => scene
+        // The `brdf` model's quadrature normalises by each object's directional albedo A(nv);
+        // a ray-traced draw runs it in either model (`integral_environment`).
+        let albedo: Vec<Vec<[f32; 4]>> = match scene.reads_brdf_quadrature() {
+            true => scene
                 .objects
                 .iter()
                 .map(|o| albedo_cache.knots(o.brdf, o.fresnel))
                 .collect(),
-            EnvironmentModel::Paper => Vec::new(),
+            false => Vec::new(),
         };
         let frame = buffers.write(
             gpu,
@@ -407,6 +408,7 @@ fn draw_deferred(
         environment_model: scene.environment_model,
         ray_traced,
         shadows: traced.is_some_and(|rt| rt.shadows),
+        integral: traced.is_some_and(|rt| rt.bounces > 0),
     }));
     // A device without ray queries shades a ray-traced draw in a ray-tracing pipeline
     // (shade_rt*.rgen); its fragment shaders cannot trace.
@@ -423,10 +425,11 @@ fn draw_deferred(
         }
         None => None,
     };
-    // The `paper` model never reads the layer texels: any texel buffer fills the binding.
-    let layer_texels = match scene.environment_model {
-        EnvironmentModel::Brdf => inputs.environment.brdf_sources(gpu)?.texels,
-        EnvironmentModel::Paper => &buffers.knots,
+    // Without the `brdf` model's quadrature nothing reads the layer texels: any texel buffer
+    // fills the binding.
+    let layer_texels = match scene.reads_brdf_quadrature() {
+        true => inputs.environment.brdf_sources(gpu)?.texels,
+        false => &buffers.knots,
     };
     let object_sets = inputs.object_sets(&gbuffer, buffers)?;
     let objects: Vec<DrawnMesh<'_>> = inputs.meshes.iter().copied().zip(&object_sets).collect();

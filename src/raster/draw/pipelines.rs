@@ -86,6 +86,8 @@ pub(super) struct ShadeVariant {
     pub ray_traced: bool,
     /// ... and shadow rays among them (`SHADOWS`).
     pub shadows: bool,
+    /// ... and SPEC §6's integral (`INTEGRAL`: bounces ≥ 1).
+    pub integral: bool,
 }
 
 /// Whether a table's knots (as the shader reads them, f32) lie at exactly i·step degrees from 0
@@ -154,6 +156,7 @@ impl PipelineKey {
             env_samples: BRDF_SAMPLES,
             env_hit_samples: BRDF_HIT_SAMPLES,
             shadows: u32::from(variant.shadows),
+            integral: u32::from(variant.integral),
         }
     }
 

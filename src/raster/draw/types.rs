@@ -83,6 +83,17 @@ pub struct DrawScene<'a> {
     pub background: Background,
 }
 
+impl DrawScene<'_> {
+    /// Whether the shading pass runs the `brdf` model's quadrature, which reads the directional
+    /// albedo knots, the layer texels and the bright split's lights: as the environment term
+    /// (`brdf`), or for the control variate of the light between objects (a draw that estimates
+    /// its integral: `integral_environment` in lacquer_shade.glsl).
+    pub fn reads_brdf_quadrature(&self) -> bool {
+        self.environment_model == EnvironmentModel::Brdf
+            || self.ray_tracing.is_some_and(|rt| rt.bounces > 0)
+    }
+}
+
 /// Most bounces of SPEC §6's integral.
 pub const MAX_BOUNCES: u32 = 4;
 /// Most rays per shaded point.
