@@ -118,21 +118,22 @@ impl EnvironmentPreparer {
     }
 
     /// `source` lit by `light`, prefiltered for `gpu` and the environment model that draws with
-    /// it (see the module doc); for `brdf` with its bright split attached, from the same decoded
-    /// map. Warnings (replaced pixels, once per map; a cache file ignored or not written) go to
-    /// `warnings`: none of them stops the render.
+    /// it (see the module doc); for `brdf`, or with `bright` (a `paper` draw that estimates the
+    /// light between objects: [`attach_bright`](Self::attach_bright)), with its bright split
+    /// attached, from the same decoded map. Warnings (replaced pixels, once per map; a cache file
+    /// ignored or not written) go to `warnings`: none of them stops the render.
     pub fn prepare(
         &mut self,
         gpu: &GpuContext,
         source: &EnvironmentSource,
-        (light, model): (EnvironmentLight, EnvironmentModel),
+        (light, model, bright): (EnvironmentLight, EnvironmentModel, bool),
         warnings: &mut Vec<Warning>,
     ) -> Result<GpuEnvironment> {
         let loaded = source.load()?;
         self.note_replaced_pixels(&loaded, warnings);
         let params = model_params(gpu, loaded.image.width, model);
         let env = self.prepare_image(gpu, &loaded.image, (light, &params), warnings)?;
-        if model == EnvironmentModel::Brdf {
+        if bright || model == EnvironmentModel::Brdf {
             env.attach_bright(self.bright_of(gpu, &loaded.image, (light, model), warnings)?)?;
         }
         Ok(env)
@@ -141,7 +142,8 @@ impl EnvironmentPreparer {
     /// Attaches to `env` (`source` prepared for `model`) its bright split, prefiltered with the
     /// same layers, unless it has one: a ray-traced `paper` draw reads it through the `brdf`
     /// model's quadrature for the light between objects' control variate (lacquer_shade.glsl's
-    /// `integral_environment`). A `brdf` environment has one already.
+    /// `integral_environment`). A `brdf` environment has one already, and so has one prepared
+    /// with `bright`; this is for one prepared earlier without (the map is decoded again).
     pub fn attach_bright(
         &mut self,
         gpu: &GpuContext,

@@ -146,11 +146,9 @@ impl SceneRenderer {
             ));
         }
         let model = scene.render.environment_model;
+        let ray_tracing = scene.render.ray_tracing_on(gpu);
         // The light between objects' control variate reads the bright split in either model.
-        let integral = scene
-            .render
-            .ray_tracing_on(gpu)
-            .is_some_and(|rt| rt.bounces > 0);
+        let integral = ray_tracing.is_some_and(|rt| rt.bounces > 0);
         let env_index = self.environment(gpu, &scene.environment, (model, integral))?;
         let objects: Vec<DrawObject> = meshes
             .iter()
@@ -189,7 +187,7 @@ impl SceneRenderer {
                 lights: &scene.lights,
                 environment,
                 environment_model: scene.render.environment_model,
-                ray_tracing: scene.render.ray_tracing_on(gpu),
+                ray_tracing,
                 background: scene.output.background,
             },
             &gpu_meshes,
@@ -282,35 +280,33 @@ impl SceneRenderer {
         let EnvironmentSpec::Map { source, light } = spec else {
             return Ok(None);
         };
-        if let Some(k) = self
+        let cached = self
             .environments
             .iter()
-            .position(|c| c.source.is(source) && c.light.same_bits(light) && c.model == model)
-        {
-            if integral {
-                let env = &self.environments[k].prefiltered;
-                let context = (*light, model);
-                (self.preparer).attach_bright(gpu, (source, env), context, &mut self.warnings)?;
+            .position(|c| c.source.is(source) && c.light.same_bits(light) && c.model == model);
+        let k = match cached {
+            Some(k) => k,
+            None => {
+                // Room first: the old cube's memory is free before the new one is made.
+                self.evict_environments(self.max_environments - 1);
+                let context = (*light, model, integral);
+                let prefiltered =
+                    (self.preparer).prepare(gpu, source, context, &mut self.warnings)?;
+                self.environments.push(CachedEnvironment {
+                    source: source.clone(),
+                    light: *light,
+                    model,
+                    prefiltered,
+                });
+                self.environments.len() - 1
             }
-            return Ok(Some(k));
-        }
-        // Room first: the old cube's memory is free before the new one is made.
-        self.evict_environments(self.max_environments - 1);
-        let prefiltered =
-            self.preparer
-                .prepare(gpu, source, (*light, model), &mut self.warnings)?;
+        };
         if integral {
-            let context = (*light, model);
-            let env = (source, &prefiltered);
-            (self.preparer).attach_bright(gpu, env, context, &mut self.warnings)?;
+            // Prepared with it above, or earlier by a draw without the integral.
+            let env = (source, &self.environments[k].prefiltered);
+            (self.preparer).attach_bright(gpu, env, (*light, model), &mut self.warnings)?;
         }
-        self.environments.push(CachedEnvironment {
-            source: source.clone(),
-            light: *light,
-            model,
-            prefiltered,
-        });
-        Ok(Some(self.environments.len() - 1))
+        Ok(Some(k))
     }
 
     /// Drops the oldest prefiltered environments until at most `keep` remain.
