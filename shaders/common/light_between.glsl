@@ -153,7 +153,8 @@ vec4 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
             }
             vec3 side = dot(s, surface.geometric_normal) < 0.0 ? -surface.geometric_normal
                                                                  : surface.geometric_normal;
-            RayHit hit = trace_nearest(offset_ray_origin(surface.point, side), s);
+            vec3 origin = offset_ray_origin(surface.point, side);
+            RayHit hit = trace_nearest(origin, s, trace_mask(surface, origin, s));
             if (!hit.hit) {
                 break;
             }

@@ -9,11 +9,23 @@
 #define RAY_SURFACE_GLSL
 
 // The point rays start from and the triangle's unit geometric normal, turned to the side of the
-// shading normal.
+// shading normal. The rest is for visibility.glsl's `trace_mask` only, a traversal shortcut that
+// changes no result and has no CPU twin: the surface's object (−1: none), the triangle's unit
+// winding normal n = (p1 − p0) × (p2 − p0) / |…|, its vertex p0, and a bound on the angle between
+// that f32 normal and the exact one.
 struct RaySurface {
     vec3 point;
     vec3 geometric_normal;
+    int object;
+    vec3 face_normal;
+    vec3 corner;
+    float tilt;
 };
+
+// A surface no ray leaves (the shading pass without ray tracing).
+RaySurface untraced_surface(vec3 point, vec3 normal) {
+    return RaySurface(point, normal, -1, normal, point, 2.0);
+}
 
 #ifdef RAY_TRACING
 // GpuMesh's interleaved vertices (position, normal: six floats) and u32 indices.
@@ -23,14 +35,13 @@ layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Mes
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer MeshIndices {
     uint values[];
 };
-// Per object: (vertex address low, high, index address low, high).
-layout(set = 0, binding = OBJECT_GEOMETRY_BINDING, std430) readonly buffer ObjectGeometry {
-    uvec4 object_geometry[];
+layout(set = 0, binding = OBJECT_GEOMETRY_BINDING, std430) readonly buffer ObjectGeometries {
+    ObjectGeometry object_geometry[];
 };
 
 // Triangle `triangle` of `object`'s mesh: its vertices' positions and (stored) normals.
 void fetch_triangle(int object, int triangle, out vec3 p[3], out vec3 normal[3]) {
-    uvec4 addresses = object_geometry[object];
+    uvec4 addresses = object_geometry[object].addresses;
     MeshVertices vertices = MeshVertices(addresses.xy);
     MeshIndices indices = MeshIndices(addresses.zw);
     for (int k = 0; k < 3; ++k) {
@@ -60,15 +71,20 @@ RaySurface ray_surface_of(vec3 p[3], vec3 normal[3], vec3 position, vec3 n) {
     vec3 e2 = p[2] - p[0];
     vec3 cross_e = cross(e1, e2);
     float area2 = dot(cross_e, cross_e);
-    RaySurface surface;
     if (!(area2 > 0.0)) {
         // A degenerate triangle (never rasterised with area, but keep the maths finite).
-        surface.point = position;
-        surface.geometric_normal = n;
-        return surface;
+        return untraced_surface(position, n);
     }
+    RaySurface surface;
     vec3 ng = cross_e * inversesqrt(area2);
     surface.geometric_normal = dot(ng, n) < 0.0 ? -ng : ng;
+    surface.object = -1;
+    surface.face_normal = ng;
+    surface.corner = p[0];
+    // The edges are exact to an ulp (differences of f32 values are correctly rounded); the cross
+    // product of edges at an angle θ then tilts by a few ulps / sin θ, and inversesqrt by 2 ulps.
+    // 2^-20 is 16 ulps of each.
+    surface.tilt = (1.0 / 1048576.0) * (1.0 + length(e1) * length(e2) * inversesqrt(area2));
     // Barycentrics of the point's projection onto the plane, clamped into the triangle.
     vec3 d = position - p[0];
     float b1 = dot(cross(d, e2), cross_e) / area2;
@@ -90,7 +106,9 @@ RaySurface ray_surface(int object, int triangle, vec3 position, vec3 n) {
     vec3 p[3];
     vec3 normal[3];
     fetch_triangle(object, triangle, p, normal);
-    return ray_surface_of(p, normal, position, n);
+    RaySurface surface = ray_surface_of(p, normal, position, n);
+    surface.object = object;
+    return surface;
 }
 
 // A ray query's hit: triangle `triangle` of `object` at barycentrics (u, v) of vertices 1 and 2.
@@ -103,7 +121,9 @@ RaySurface hit_surface(int object, int triangle, vec2 uv, out vec3 position, out
     float w = 1.0 - uv.x - uv.y;
     position = w * p[0] + uv.x * p[1] + uv.y * p[2];
     normal = normalize(w * n[0] + uv.x * n[1] + uv.y * n[2]);
-    return ray_surface_of(p, n, position, normal);
+    RaySurface surface = ray_surface_of(p, n, position, normal);
+    surface.object = object;
+    return surface;
 }
 #endif
 

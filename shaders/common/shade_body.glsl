@@ -67,7 +67,7 @@ vec3 shade_object(int object, vec3 position, vec4 normal, uint key, out vec4 int
     return radiance;
 #else
     vec3 environment;
-    return lacquer_radiance(p, view_blur, position, normal.xyz, RaySurface(position, normal.xyz),
+    return lacquer_radiance(p, view_blur, position, normal.xyz, untraced_surface(position, normal.xyz),
         environment);
 #endif
 }

@@ -6,6 +6,7 @@
 use serde::Serialize;
 
 use super::{BenchConfig, ScratchDir, Stat, Target};
+use crate::gpu::shaders::interface::TRACE_MASK_ALL;
 use crate::gpu::{GpuContext, Instance};
 use crate::raster::draw::{DrawOptions, GpuMesh};
 use crate::raster::BuiltinMesh;
@@ -156,6 +157,7 @@ fn top_level(gpu: &GpuContext, config: &BenchConfig) -> Result<StructureFigure> 
         instances.push(Instance {
             geometry: mesh.bottom_level(gpu)?,
             custom_index: index as u32,
+            mask: TRACE_MASK_ALL as u8,
         });
     }
     let (mut builds, mut bytes) = (Vec::new(), 0);

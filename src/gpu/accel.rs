@@ -62,11 +62,13 @@ pub struct TriangleGeometry<'a> {
 }
 
 /// One instance of a top-level structure: a bottom-level structure in world space (identity
-/// transform: shikki's meshes are already placed) and the number the shaders read back as
-/// `rayQueryGetIntersectionInstanceCustomIndexEXT` (24 bits).
+/// transform: shikki's meshes are already placed), the number the shaders read back as
+/// `rayQueryGetIntersectionInstanceCustomIndexEXT` (24 bits) and its mask (a ray meets it when
+/// its own mask shares a bit).
 pub struct Instance<'a> {
     pub geometry: &'a AccelerationStructure,
     pub custom_index: u32,
+    pub mask: u8,
 }
 
 impl GpuContext {
@@ -111,7 +113,10 @@ impl GpuContext {
                 transform: vk::TransformMatrixKHR {
                     matrix: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
                 },
-                instance_custom_index_and_mask: vk::Packed24_8::new(instance.custom_index, 0xff),
+                instance_custom_index_and_mask: vk::Packed24_8::new(
+                    instance.custom_index,
+                    instance.mask,
+                ),
                 instance_shader_binding_table_record_offset_and_flags: vk::Packed24_8::new(
                     0,
                     (vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE

@@ -10,9 +10,11 @@ pub mod lathe;
 pub mod lights;
 pub mod mesh;
 pub mod mesh_io;
+pub mod self_hits;
 
 pub use camera::Camera;
 pub use draw::gpu_mesh;
 pub use draw::GpuMesh;
 pub use lights::{default_lights, Light, MAX_LIGHTS};
 pub use mesh::{BuiltinMesh, Mesh};
+pub use self_hits::SelfHits;

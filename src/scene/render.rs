@@ -149,7 +149,6 @@ impl SceneRenderer {
         let ray_tracing = scene.render.ray_tracing_on(gpu);
         // The light between objects' control variate reads the bright split in either model.
         let integral = ray_tracing.is_some_and(|rt| rt.bounces > 0);
-        let env_index = self.environment(gpu, &scene.environment, (model, integral))?;
         let objects: Vec<DrawObject> = meshes
             .iter()
             .zip(&shading)
@@ -160,7 +159,52 @@ impl SceneRenderer {
                 view_blur: *view_blur,
             })
             .collect();
-        self.upload_meshes(gpu, &meshes)?;
+        let draw_scene = |environment| DrawScene {
+            objects: &objects,
+            camera: &scene.camera,
+            lights: &scene.lights,
+            environment,
+            environment_model: model,
+            ray_tracing,
+            background: scene.output.background,
+        };
+        let settings = RenderSettings {
+            width: scene.output.width,
+            height: scene.output.height,
+            samples: scene.output.samples,
+        };
+        // The draw's pipelines are built on a second thread while this one prepares the
+        // environment, the meshes and the materials' albedo (the layers of a map prepared for
+        // `model`).
+        let layers = match scene.environment {
+            EnvironmentSpec::Map { .. } => {
+                Some(crate::environment::PrefilterParams::for_model(1, model).layers)
+            }
+            EnvironmentSpec::None => None,
+        };
+        let ahead = self
+            .draw
+            .pipelines_ahead(gpu, &draw_scene(None), (settings.samples, layers));
+        let (env_index, built) = std::thread::scope(|scope| {
+            let building = scope.spawn(|| ahead.build(gpu));
+            let prepared = self
+                .environment(gpu, &scene.environment, (model, integral))
+                .and_then(|env_index| {
+                    self.upload_meshes(gpu, &meshes)?;
+                    self.draw.albedo_ahead(&draw_scene(None));
+                    Ok(env_index)
+                });
+            let built = building.join().unwrap_or_else(|_| {
+                Err(crate::Error::invalid(
+                    "pipeline build",
+                    "panicked",
+                    "report this as a bug",
+                ))
+            });
+            (prepared, built)
+        });
+        let env_index = env_index?;
+        self.draw.add_pipelines(built?);
         let gpu_meshes: Vec<&GpuMesh> = meshes
             .iter()
             .filter_map(|mesh| {
@@ -181,21 +225,9 @@ impl SceneRenderer {
         let environment = env_index.map(|k| &self.environments[k].prefiltered);
         let (image, timings) = self.draw.render_meshes(
             gpu,
-            &DrawScene {
-                objects: &objects,
-                camera: &scene.camera,
-                lights: &scene.lights,
-                environment,
-                environment_model: scene.render.environment_model,
-                ray_tracing,
-                background: scene.output.background,
-            },
+            &draw_scene(environment),
             &gpu_meshes,
-            &RenderSettings {
-                width: scene.output.width,
-                height: scene.output.height,
-                samples: scene.output.samples,
-            },
+            &settings,
             options,
         )?;
         if self.validation_fails_render {

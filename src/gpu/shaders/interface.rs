@@ -74,8 +74,19 @@ shader_interface! {
         /// The ray-traced shading pass (shade_rt*.frag): the draw's top-level acceleration
         /// structure, for SPEC §6's visibility.
         SCENE_TLAS_BINDING: u32 = 11;
-        /// ... and per object its mesh's vertex and index buffer addresses (ray_surface.glsl).
+        /// ... and per object an `ObjectGeometry` (ray_surface.glsl).
         OBJECT_GEOMETRY_BINDING: u32 = 12;
+        /// Instance masks of the top-level structure (raster/self_hits.rs): a ray that cannot
+        /// meet its own mesh again leaves that object's bit out of TRACE_MASK_ALL. Objects
+        /// without a bit of their own (all but the first seven a ray can leave out) share
+        /// TRACE_MASK_SHARED, which no ray leaves out.
+        TRACE_MASK_ALL: u32 = 255;
+        TRACE_MASK_SHARED: u32 = 128;
+        /// `ObjectGeometry::clear_sides` bits (raster/self_hits.rs `SelfHits`): a ray leaving a
+        /// face along its winding normal (front) or against it (back) never meets the mesh
+        /// again.
+        SELF_HITS_FRONT_CLEAR: u32 = 1;
+        SELF_HITS_BACK_CLEAR: u32 = 2;
         /// The ray-tracing pipeline's shading (shade_rt*.rgen, where the device has no ray
         /// queries): the image and the integral image it writes as storage images, where the
         /// fragment shading pass writes colour attachments.
@@ -268,6 +279,20 @@ shader_interface! {
             dispatch_x: uint,
             dispatch_y: uint,
             dispatch_z: uint,
+        }
+
+        /// Per object of a ray-traced draw (`OBJECT_GEOMETRY_BINDING`, ray_surface.glsl).
+        struct ObjectGeometry: std430 {
+            /// Its mesh's vertex and index buffer addresses: (vertices low, high, indices low,
+            /// high) words.
+            addresses: uvec4,
+            /// `SELF_HITS_FRONT_CLEAR` | `SELF_HITS_BACK_CLEAR` of its mesh, or 0.
+            clear_sides: uint,
+            /// `SelfHits::slack`: how far a vertex may lie above a face's plane.
+            slack: float,
+            /// Its instance mask bit that its own rays may leave out; 0 where none.
+            own_mask: uint,
+            unused: uint,
         }
 
         /// Step 2's push constants (downsample.comp).

@@ -7,6 +7,7 @@ use crate::gpu::{
     VertexAttribute,
 };
 use crate::raster::mesh::Mesh;
+use crate::raster::SelfHits;
 use crate::Result;
 use std::mem::{offset_of, size_of};
 use std::sync::OnceLock;
@@ -43,6 +44,8 @@ pub struct GpuMesh {
     /// Its bottom-level acceleration structure, built by the first ray-traced draw and kept as
     /// long as the mesh: [`GpuMesh::bottom_level`].
     bottom_level: OnceLock<AccelerationStructure>,
+    /// Which rays leaving it can meet it again (on a device without ray queries: any).
+    pub(crate) self_hits: SelfHits,
 }
 
 impl GpuMesh {
@@ -71,6 +74,10 @@ impl GpuMesh {
             index_count: mesh.indices.len() as u32,
             vertex_count: vertices.len() as u32,
             bottom_level: OnceLock::new(),
+            self_hits: match gpu.info().ray_query.is_enabled() {
+                true => SelfHits::of(mesh),
+                false => SelfHits::ANY,
+            },
         })
     }
 

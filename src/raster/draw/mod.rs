@@ -51,13 +51,16 @@ pub use types::{
 use crate::environment::brdf_quadrature::AlbedoCache;
 use crate::environment::gpu::GpuEnvironment;
 use crate::environment::{CubeImage, PrefilteredEnvironment};
-use crate::gpu::shaders::interface::Frame;
+use crate::gpu::shaders::interface::{
+    Frame, ObjectGeometry, SELF_HITS_BACK_CLEAR, SELF_HITS_FRONT_CLEAR, TRACE_MASK_SHARED,
+};
 use crate::gpu::{
     AccelerationStructure, Buffer, BufferUsage, DescriptorSet, GpuContext, GraphicsPipeline,
     Instance, RayTracingPipeline, Sampler, TimestampPool,
 };
 use crate::output::HdrImage;
 use crate::raster::camera::PixelRect;
+use crate::raster::SelfHits;
 use crate::{Error, Result};
 use denoise::{denoise, denoise_params, denoise_sigma, DenoisePass};
 use frame::{fresnel_knots, DrawBuffers};
@@ -78,6 +81,8 @@ use types::validate;
 pub struct LacquerRenderer {
     pipelines: PipelineTable,
     targets: TargetCache,
+    /// Each material's directional-albedo knots (the `brdf` quadrature's), computed once.
+    albedo_cache: AlbedoCache,
     /// Made by the first draw.
     resources: Option<Resources>,
 }
@@ -91,8 +96,6 @@ struct Resources {
     black_environment: Option<GpuEnvironment>,
     /// Made by the first timed draw.
     timestamps: Option<TimestampPool>,
-    /// Each material's directional-albedo knots (the `brdf` model), computed once.
-    albedo_cache: AlbedoCache,
     /// Made by the first draw denoised on the device.
     denoise: Option<DenoisePass>,
 }
@@ -104,7 +107,6 @@ impl Resources {
             buffers: DrawBuffers::new(gpu)?,
             black_environment: None,
             timestamps: None,
-            albedo_cache: AlbedoCache::default(),
             denoise: None,
         })
     }
@@ -145,6 +147,53 @@ impl LacquerRenderer {
         let meshes: Vec<&GpuMesh> = meshes.iter().collect();
         let (image, _) = self.draw(gpu, scene, &meshes, settings, DrawOptions::default())?;
         Ok(image)
+    }
+
+    /// The graphics pipelines a lacquer draw of `scene` into `samples`-sample targets will use
+    /// that this renderer has not built, so that a caller can build them while it prepares the
+    /// draw's other inputs: `scene.environment` is not read, the draw's will have `layers`
+    /// layers (`None`: the draw has no environment). A guess that misses costs only the time:
+    /// the draw builds what it lacks.
+    pub fn pipelines_ahead(
+        &self,
+        gpu: &GpuContext,
+        scene: &DrawScene<'_>,
+        (samples, layers): (u32, Option<u32>),
+    ) -> PipelinesAhead {
+        let layer_count = layers.unwrap_or(BLACK_ENVIRONMENT_LAYERS as u32);
+        let pow2_grid = scene
+            .objects
+            .iter()
+            .all(|o| fresnel_on_pow2_grid(&fresnel_knots(o.fresnel)));
+        let keys = DeferredKeys::of(scene, (samples, layer_count), pow2_grid);
+        let traced = scene.ray_tracing.is_some_and(|rt| rt.traces());
+        let shade_is_graphics = !(traced && gpu.info().ray_query.uses_pipeline());
+        let mut wanted = vec![keys.gbuffer, keys.coverage];
+        if shade_is_graphics {
+            wanted.push(keys.shade);
+        }
+        wanted.retain(|key| !self.pipelines.has(key));
+        PipelinesAhead(wanted)
+    }
+
+    /// Computes what a draw of `scene` reads of its materials' directional albedo (the `brdf`
+    /// quadrature's knots, tens of milliseconds a material) ahead of it, as [`pipelines_ahead`] does for its
+    /// pipelines: on the first core while the second builds those.
+    ///
+    /// [`pipelines_ahead`]: Self::pipelines_ahead
+    pub fn albedo_ahead(&mut self, scene: &DrawScene<'_>) {
+        if scene.reads_brdf_quadrature() {
+            for object in scene.objects {
+                self.albedo_cache.knots(object.brdf, object.fresnel);
+            }
+        }
+    }
+
+    /// Keeps pipelines built ahead ([`pipelines_ahead`](Self::pipelines_ahead)).
+    pub fn add_pipelines(&mut self, built: BuiltAhead) {
+        for (key, pipeline) in built.0 {
+            self.pipelines.insert(key, pipeline);
+        }
     }
 
     /// [`render`](Self::render) with each object's mesh already on the device: `meshes[i]` must
@@ -235,7 +284,6 @@ impl LacquerRenderer {
             buffers,
             black_environment,
             timestamps,
-            albedo_cache,
             denoise,
         } = get_or_try_insert(&mut self.resources, || Resources::new(gpu))?;
         let environment = match scene.environment {
@@ -265,7 +313,7 @@ impl LacquerRenderer {
             true => scene
                 .objects
                 .iter()
-                .map(|o| albedo_cache.knots(o.brdf, o.fresnel))
+                .map(|o| self.albedo_cache.knots(o.brdf, o.fresnel))
                 .collect(),
             false => Vec::new(),
         };
@@ -382,6 +430,67 @@ impl DrawInputs<'_> {
     }
 }
 
+/// The graphics pipelines of a lacquer draw (`draw_deferred`): its G-buffer, coverage and
+/// shading passes (the last a ray-tracing pipeline instead on a device without ray queries).
+struct DeferredKeys {
+    gbuffer: PipelineKey,
+    coverage: PipelineKey,
+    shade: PipelineKey,
+}
+
+impl DeferredKeys {
+    /// The keys of a draw of `scene` into targets of `samples` with an environment of
+    /// `layer_count` layers; `fresnel_pow2_grid` whether every object's Fresnel knots lie on one
+    /// ([`fresnel_on_pow2_grid`]).
+    fn of(
+        scene: &DrawScene<'_>,
+        (samples, layer_count): (u32, u32),
+        fresnel_pow2_grid: bool,
+    ) -> Self {
+        let environment_background = scene.background == Background::Environment;
+        let traced = scene.ray_tracing.filter(RayTracing::traces);
+        let ray_traced = traced.is_some();
+        let key = |kind| PipelineKey {
+            kind,
+            samples,
+            layer_count,
+        };
+        DeferredKeys {
+            gbuffer: key(PipelineKind::GBuffer(ray_traced)),
+            coverage: key(PipelineKind::Coverage(environment_background, ray_traced)),
+            shade: key(PipelineKind::Shade(ShadeVariant {
+                environment_background,
+                fresnel_pow2_grid,
+                environment_model: scene.environment_model,
+                ray_traced,
+                shadows: traced.is_some_and(|rt| rt.shadows),
+                integral: traced.is_some_and(|rt| rt.bounces > 0),
+            })),
+        }
+    }
+}
+
+/// Graphics pipelines a lacquer draw will need, to be built ahead of it on another thread
+/// ([`LacquerRenderer::pipelines_ahead`]): lavapipe spends a third of a second of one core on a
+/// ray-traced shading pipeline, warm caches or not (it keeps no pipeline in its pipeline cache,
+/// only the machine code in Mesa's shader cache), and a render has about that much other
+/// preparation for its first core (BENCHMARKS.md, "Rays that cannot meet their own mesh").
+pub struct PipelinesAhead(Vec<PipelineKey>);
+
+impl PipelinesAhead {
+    /// Builds the pipelines (on any thread; Vulkan's pipeline cache is internally synchronised).
+    pub fn build(self, gpu: &GpuContext) -> Result<BuiltAhead> {
+        let mut built = Vec::with_capacity(self.0.len());
+        for key in self.0 {
+            built.push((key, PipelineTable::build(gpu, key)?));
+        }
+        Ok(BuiltAhead(built))
+    }
+}
+
+/// What [`PipelinesAhead::build`] made, for [`LacquerRenderer::add_pipelines`].
+pub struct BuiltAhead(Vec<(PipelineKey, GraphicsPipeline)>);
+
 /// The lacquer draw: per strip, the G-buffer pass, the shading pass and the copy-out; then, with
 /// `denoise` (the pass and σ) and rays traced, the denoise of the whole image on the device.
 fn draw_deferred(
@@ -397,19 +506,17 @@ fn draw_deferred(
     // The ray tracing of this draw, if it traces any ray.
     let traced = scene.ray_tracing.filter(RayTracing::traces);
     let ray_traced = traced.is_some();
-    let gbuffer = pipelines.get(gpu, inputs.key(PipelineKind::GBuffer(ray_traced)))?;
-    let coverage = pipelines.get(
-        gpu,
-        inputs.key(PipelineKind::Coverage(environment_background, ray_traced)),
-    )?;
-    let shade_key = inputs.key(PipelineKind::Shade(ShadeVariant {
-        environment_background,
+    let keys = DeferredKeys::of(
+        scene,
+        (
+            inputs.settings.samples,
+            inputs.environment.layers.len() as u32,
+        ),
         fresnel_pow2_grid,
-        environment_model: scene.environment_model,
-        ray_traced,
-        shadows: traced.is_some_and(|rt| rt.shadows),
-        integral: traced.is_some_and(|rt| rt.bounces > 0),
-    }));
+    );
+    let gbuffer = pipelines.get(gpu, keys.gbuffer)?;
+    let coverage = pipelines.get(gpu, keys.coverage)?;
+    let shade_key = keys.shade;
     // A device without ray queries shades a ray-traced draw in a ray-tracing pipeline
     // (shade_rt*.rgen); its fragment shaders cannot trace.
     let ray_pipeline = ray_traced && gpu.info().ray_query.uses_pipeline();
@@ -418,9 +525,10 @@ fn draw_deferred(
     let structures = match traced {
         Some(rt) => {
             frame.light_transport = [rt.rays as i32, rt.bounces as i32, rt.seed as i32, 0];
+            let masks = own_masks(inputs.meshes);
             Some((
-                top_level(gpu, inputs.meshes)?,
-                object_geometry(gpu, inputs.meshes)?,
+                top_level(gpu, inputs.meshes, &masks)?,
+                object_geometry(gpu, inputs.meshes, &masks)?,
             ))
         }
         None => None,
@@ -597,34 +705,75 @@ fn draw_forward(
     })
 }
 
-/// A top-level acceleration structure over `meshes` (instance i is object i; meshes without
-/// triangles are left out).
-fn top_level(gpu: &GpuContext, meshes: &[&GpuMesh]) -> Result<AccelerationStructure> {
+/// Per object, the instance mask bit that rays leaving it may leave out (raster/self_hits.rs,
+/// visibility.glsl `trace_mask`): a bit of its own below `TRACE_MASK_SHARED` for each of the
+/// first seven objects whose mesh some rays cannot meet again, 0 for every other object.
+fn own_masks(meshes: &[&GpuMesh]) -> Vec<u32> {
+    own_mask_bits(meshes.iter().map(|m| (m.triangle_count(), m.self_hits)))
+}
+
+/// [`own_masks`] of meshes given by their triangle counts and classifications.
+fn own_mask_bits(meshes: impl Iterator<Item = (u32, SelfHits)>) -> Vec<u32> {
+    let mut next = 1;
+    meshes
+        .map(|(triangles, hits)| {
+            let clear = triangles > 0 && (hits.front_clear || hits.back_clear);
+            match clear && next < TRACE_MASK_SHARED {
+                true => {
+                    next <<= 1;
+                    next >> 1
+                }
+                false => 0,
+            }
+        })
+        .collect()
+}
+
+/// A top-level acceleration structure over `meshes` (instance i is object i, its mask its own
+/// bit of `own_masks` or else the shared one; meshes without triangles are left out).
+fn top_level(gpu: &GpuContext, meshes: &[&GpuMesh], own: &[u32]) -> Result<AccelerationStructure> {
     let mut instances = Vec::with_capacity(meshes.len());
-    for (index, mesh) in meshes.iter().enumerate() {
+    for ((index, mesh), &own) in meshes.iter().enumerate().zip(own) {
         if mesh.triangle_count() > 0 {
             instances.push(Instance {
                 geometry: mesh.bottom_level(gpu)?,
                 custom_index: index as u32,
+                mask: match own {
+                    0 => TRACE_MASK_SHARED as u8,
+                    bit => bit as u8,
+                },
             });
         }
     }
     Ok(gpu.build_top_level("scene top-level structure", &instances)?)
 }
 
-/// Per object, its mesh's vertex and index buffer addresses (low, high words), as
-/// ray_surface.glsl reads them at `OBJECT_GEOMETRY_BINDING`. A mesh without triangles (never hit,
-/// never shaded) gets another mesh's: llvmpipe runs the loads of a branch no lane takes, and
-/// they must stay in bounds (visibility.glsl's `trace_nearest`).
-fn object_geometry(gpu: &GpuContext, meshes: &[&GpuMesh]) -> Result<Buffer> {
+/// Per object, its `ObjectGeometry` as ray_surface.glsl and visibility.glsl read it at
+/// `OBJECT_GEOMETRY_BINDING`: its mesh's buffer addresses, which rays leaving it can meet it
+/// again, and its bit of `own`. A mesh without triangles (never hit, never shaded) gets another
+/// mesh's addresses: llvmpipe runs the loads of a branch no lane takes, and they must stay in
+/// bounds (visibility.glsl's `trace_nearest`).
+fn object_geometry(gpu: &GpuContext, meshes: &[&GpuMesh], own: &[u32]) -> Result<Buffer> {
     let stand_in = meshes.iter().find(|m| m.triangle_count() > 0).copied();
     let rows = meshes
         .iter()
-        .map(|&mesh| match (mesh.triangle_count(), stand_in) {
-            (0, Some(other)) => other.addresses(),
-            _ => mesh.addresses(),
+        .zip(own)
+        .map(|(&mesh, &own_mask)| {
+            let addresses = match (mesh.triangle_count(), stand_in) {
+                (0, Some(other)) => other.addresses()?,
+                _ => mesh.addresses()?,
+            };
+            let hits = mesh.self_hits;
+            Ok(ObjectGeometry {
+                addresses,
+                clear_sides: u32::from(hits.front_clear) * SELF_HITS_FRONT_CLEAR
+                    + u32::from(hits.back_clear) * SELF_HITS_BACK_CLEAR,
+                slack: hits.slack,
+                own_mask,
+                unused: 0,
+            })
         })
-        .collect::<Result<Vec<[u32; 4]>>>()?;
+        .collect::<Result<Vec<ObjectGeometry>>>()?;
     gpu_mesh::upload(gpu, "object geometry", &rows, BufferUsage::STORAGE)
 }
 
@@ -636,6 +785,9 @@ fn read_back(readback: &Buffer, settings: &RenderSettings) -> Result<HdrImage> {
     })
 }
 
+/// The layers of [`upload_black_environment`]'s stand-in.
+const BLACK_ENVIRONMENT_LAYERS: usize = 2;
+
 /// The stand-in for a draw without an environment: black, uploaded rather than prefiltered, so
 /// a context that never sees an environment builds no prefilter pipelines.
 fn upload_black_environment(gpu: &GpuContext) -> Result<GpuEnvironment> {
@@ -645,8 +797,9 @@ fn upload_black_environment(gpu: &GpuContext) -> Result<GpuEnvironment> {
         texels: vec![[0.0, 0.0, 0.0, 1.0]; 6 * (face as usize).pow(2)],
     };
     let env = PrefilteredEnvironment {
+        // β of the sharp layer 0 and of one fully blurred layer.
         betas: vec![0.0, 1.0],
-        layers: vec![black(), black()],
+        layers: (0..BLACK_ENVIRONMENT_LAYERS).map(|_| black()).collect(),
         irradiance: black(),
     };
     GpuEnvironment::upload(gpu, &env)
@@ -683,4 +836,29 @@ fn screen_bounds(inputs: &DrawInputs<'_>) -> PixelRect {
         x1: 0,
         y1: 0,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_first_seven_clear_objects_get_a_mask_bit_of_their_own() {
+        let convex = SelfHits {
+            front_clear: true,
+            back_clear: false,
+            slack: 0.0,
+        };
+        let flat = SelfHits {
+            back_clear: true,
+            ..convex
+        };
+        // A bowl, an empty mesh, then nine convex or flat ones.
+        let mut meshes = vec![(100, SelfHits::ANY), (0, convex)];
+        meshes.extend((0..9).map(|i| (12, if i % 2 == 0 { convex } else { flat })));
+        let bits = own_mask_bits(meshes.into_iter());
+        assert_eq!(bits, [0, 0, 1, 2, 4, 8, 16, 32, 64, 0, 0]);
+        // No bit is the shared one, so a ray that leaves its own out still meets the others.
+        assert!(bits.iter().all(|&b| b & TRACE_MASK_SHARED == 0));
+    }
 }

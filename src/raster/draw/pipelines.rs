@@ -310,13 +310,27 @@ impl PipelineTable {
     pub fn get(&mut self, gpu: &GpuContext, key: PipelineKey) -> Result<Arc<GraphicsPipeline>> {
         let pipeline = match self.pipelines.entry(key) {
             Entry::Occupied(entry) => entry.into_mut(),
-            Entry::Vacant(entry) => {
-                let constants = key.constants();
-                let pipeline = gpu.create_graphics_pipeline(&key.desc(&constants))?;
-                entry.insert(Arc::new(pipeline))
-            }
+            Entry::Vacant(entry) => entry.insert(Arc::new(Self::build(gpu, key)?)),
         };
         Ok(Arc::clone(pipeline))
+    }
+
+    /// Builds the pipeline of `key` (without keeping it: [`insert`](Self::insert)).
+    pub fn build(gpu: &GpuContext, key: PipelineKey) -> Result<GraphicsPipeline> {
+        let constants = key.constants();
+        Ok(gpu.create_graphics_pipeline(&key.desc(&constants))?)
+    }
+
+    /// Whether the table holds the pipeline of `key`.
+    pub fn has(&self, key: &PipelineKey) -> bool {
+        self.pipelines.contains_key(key)
+    }
+
+    /// Keeps `pipeline` as the one of `key` (unless the table has one already).
+    pub fn insert(&mut self, key: PipelineKey, pipeline: GraphicsPipeline) {
+        self.pipelines
+            .entry(key)
+            .or_insert_with(|| Arc::new(pipeline));
     }
 
     /// The ray-tracing pipeline that shades `variant` (ray-traced) on a device without ray
