@@ -1,3 +1,4 @@
+mod against_path_tracer;
 mod batch;
 mod cli;
 mod corpus;

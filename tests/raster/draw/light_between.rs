@@ -16,7 +16,7 @@ use shikki::environment::gpu::{GpuEnvironment, GpuPrefilter};
 use shikki::environment::{EnvironmentLight, EnvironmentModel, Equirect, PrefilterParams};
 use shikki::gpu::GpuContext;
 use shikki::oracle::light_between::{ConstantEnvironment, Twin};
-use shikki::oracle::path_tracer::{self, PathImage, PathScene};
+use shikki::oracle::path_tracer::{self, PathEnvironment, PathImage, PathScene};
 use shikki::oracle::shadows::TracedScene;
 use shikki::output::HdrImage;
 use shikki::raster::camera::Camera;
@@ -574,7 +574,7 @@ fn converges_to_the_path_tracer() {
             objects: &objects,
             camera: &camera,
             lights: &lights,
-            environment: SKY.map(f64::from),
+            environment: PathEnvironment::Constant(SKY.map(f64::from)),
         },
         (64, 64),
         1,
