@@ -15,13 +15,10 @@
 
 use std::path::Path;
 
-use shikki::environment::{load_environment, EnvironmentSource};
-use shikki::oracle::path_tracer::{self, PathEnvironment, PathScene};
-use shikki::oracle::shadows::TracedObject;
+use shikki::oracle::path_scene::OwnedPathScene;
 use shikki::output::exr::{decode_exr, encode_exr};
 use shikki::output::HdrImage;
-use shikki::raster::mesh_io::{load_mesh, transform_mesh};
-use shikki::scene::{load_scene_file, EnvironmentSpec, MeshSource};
+use shikki::scene::load_scene_file;
 
 type Failure = Box<dyn std::error::Error>;
 
@@ -63,79 +60,17 @@ fn reference(
     seed: u64,
 ) -> Result<(), Failure> {
     let scene = load_scene_file(scene_path)?;
-    let mut meshes = Vec::new();
-    let mut materials = Vec::new();
-    for object in &scene.objects {
-        let base = match &object.mesh {
-            MeshSource::Builtin(builtin) => builtin.mesh(),
-            MeshSource::File(path) => load_mesh(path)?,
-            MeshSource::Inline(mesh) => (**mesh).clone(),
-        };
-        meshes.push(transform_mesh(&base, object.transform));
-        materials.push((
-            object.material.brdf_params()?,
-            object.material.fresnel_table()?,
-        ));
-    }
-    let objects: Vec<TracedObject> = meshes
-        .iter()
-        .zip(&materials)
-        .map(|(mesh, (brdf, fresnel))| TracedObject {
-            mesh,
-            brdf,
-            fresnel,
-        })
-        .collect();
-    let map = match &scene.environment {
-        EnvironmentSpec::None => None,
-        EnvironmentSpec::Map { source, light } => {
-            let image = match source {
-                EnvironmentSource::Named(name) => load_environment(name)?.image,
-                EnvironmentSource::Loaded(loaded) => loaded.image.clone(),
-            };
-            Some((image, *light))
-        }
-    };
-    let environment = match &map {
-        None => PathEnvironment::Constant([0.0; 3]),
-        Some((image, light)) => PathEnvironment::Map {
-            image,
-            light: *light,
-        },
-    };
     let size = (scene.output.width, scene.output.height);
     let started = std::time::Instant::now();
-    let traced = path_tracer::render(
-        &PathScene {
-            objects: &objects,
-            camera: &scene.camera,
-            lights: &scene.lights,
-            environment,
-        },
-        size,
-        bounces,
-        paths,
-        seed,
-    );
+    let traced = OwnedPathScene::of(&scene)?.render(size, bounces, paths, seed);
     std::fs::write(out, encode_exr(&traced.mean)?)?;
-    // The reference's own noise: its standard errors against its values, as relative RMSE.
-    let (mut noise, mut norm) = (0.0, 0.0);
-    for (pixel, error) in traced.mean.pixels.iter().zip(&traced.std_error) {
-        if pixel[3] > 0.0 {
-            noise += 3.0 * error * error;
-            norm += pixel[..3]
-                .iter()
-                .map(|&c| f64::from(c).powi(2))
-                .sum::<f64>();
-        }
-    }
     println!(
         "{}: {} × {}, {bounces} bounces, {paths} paths, {:.1} s; its noise ≤ {:.2} % relative RMSE",
         out.display(),
         size.0,
         size.1,
         started.elapsed().as_secs_f64(),
-        100.0 * (noise / norm).sqrt()
+        100.0 * traced.relative_noise()
     );
     Ok(())
 }

@@ -175,7 +175,10 @@ fn top_level(gpu: &GpuContext, config: &BenchConfig) -> Result<StructureFigure> 
 }
 
 /// The scene file of the whole-process figure.
-const SPHERE_ON_BOARD: &str = r#"[camera]
+/// The issue's sphere resting on a board (issue 17), lit by the studio and a directional light,
+/// at 512²: the scene of the whole-process figure (also what tests/scene/against_path_tracer.rs
+/// holds to the path tracer).
+pub const SPHERE_ON_BOARD: &str = r#"[camera]
 eye = [0.4, 2.6, 3.2]
 target = [0.0, 0.3, 0.0]
 fov_deg = 40

@@ -132,6 +132,8 @@ fn render_and_write(
     png.validate()?;
     let gpu = super::open_gpu_tracing(scene.render.ray_tracing_asked().is_some())?;
     let mut renderer = SceneRenderer::new(&gpu)?;
+    // One render in this process: its pipelines build while the environment is prepared.
+    renderer.set_pipelines_on_a_thread(true);
     let image = renderer.render(&gpu, scene);
     super::print_warnings(renderer.take_warnings());
     output::write_image(path, &image?, &png)?;

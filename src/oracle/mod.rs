@@ -6,6 +6,7 @@
 pub mod bvh;
 pub mod light_between;
 pub mod map_sampler;
+pub mod path_scene;
 pub mod path_tracer;
 pub mod raycast;
 pub mod shadows;

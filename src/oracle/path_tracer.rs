@@ -100,6 +100,25 @@ pub struct PathImage {
     pub std_error: Vec<f64>,
 }
 
+impl PathImage {
+    /// The image's own noise as a whole-image relative RMSE, √(Σ 3·σ² / Σ |mean|²) over the
+    /// covered pixels (σ the largest channel's standard error, so an upper bound): what a
+    /// comparison with it takes out in quadrature.
+    pub fn relative_noise(&self) -> f64 {
+        let (mut noise, mut norm) = (0.0, 0.0);
+        for (pixel, error) in self.mean.pixels.iter().zip(&self.std_error) {
+            if pixel[3] > 0.0 {
+                noise += 3.0 * error * error;
+                norm += pixel[..3]
+                    .iter()
+                    .map(|&c| f64::from(c).powi(2))
+                    .sum::<f64>();
+            }
+        }
+        (noise / norm).sqrt()
+    }
+}
+
 /// Renders `scene` at `width × height` with `bounces` (B) reflections sampled before the
 /// environment model closes the path, averaging `samples_per_pixel` paths per pixel (at least
 /// one; with B = 0 under a constant environment nothing is sampled and one path is exact). The

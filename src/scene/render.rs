@@ -68,6 +68,10 @@ pub struct SceneRenderer {
     warnings: Vec<Warning>,
     /// [`Warning::NoRayQueries`] was given.
     said_no_ray_queries: bool,
+    /// [`set_pipelines_on_a_thread`](Self::set_pipelines_on_a_thread).
+    pipelines_on_a_thread: bool,
+    /// Whether a render built its pipelines on a second thread already: only the first does.
+    built_ahead: bool,
     validation_fails_render: bool,
 }
 
@@ -93,6 +97,8 @@ impl SceneRenderer {
             gpu_meshes: Vec::new(),
             warnings: Vec::new(),
             said_no_ray_queries: false,
+            pipelines_on_a_thread: false,
+            built_ahead: false,
             validation_fails_render: true,
         }
     }
@@ -107,6 +113,16 @@ impl SceneRenderer {
     pub fn set_environment_capacity(&mut self, count: usize) {
         self.max_environments = count.max(1);
         self.evict_environments(self.max_environments);
+    }
+
+    /// Whether the first render builds the draw's pipelines on a second thread (a scoped one,
+    /// joined before it returns) while the calling thread prepares the environment and meshes:
+    /// ~0.2 s off a one-render process on lavapipe (BENCHMARKS.md, "Rays that cannot meet their
+    /// own mesh"). Off by default: a process that renders on keeps its resident memory flatter
+    /// with every allocation of the driver's compiler on its own threads (the soak test), and a
+    /// C caller sees no thread it did not start. `shikki render` turns it on.
+    pub fn set_pipelines_on_a_thread(&mut self, on: bool) {
+        self.pipelines_on_a_thread = on;
     }
 
     /// Whether a render that drew validation-layer messages fails with them (the default) or
@@ -173,9 +189,9 @@ impl SceneRenderer {
             height: scene.output.height,
             samples: scene.output.samples,
         };
-        // The draw's pipelines are built on a second thread while this one prepares the
-        // environment, the meshes and the materials' albedo (the layers of a map prepared for
-        // `model`).
+        // With `pipelines_on_a_thread`, the first render builds the draw's pipelines on a second
+        // thread while this one prepares the environment, the meshes and the materials' albedo
+        // (the layers of a map prepared for `model`).
         let layers = match scene.environment {
             EnvironmentSpec::Map { .. } => {
                 Some(crate::environment::PrefilterParams::for_model(1, model).layers)
@@ -185,24 +201,36 @@ impl SceneRenderer {
         let ahead = self
             .draw
             .pipelines_ahead(gpu, &draw_scene(None), (settings.samples, layers));
-        let (env_index, built) = std::thread::scope(|scope| {
-            let building = scope.spawn(|| ahead.build(gpu));
-            let prepared = self
-                .environment(gpu, &scene.environment, (model, integral))
+        // Only the first: what it saves is the start of a one-render process (the CLI's). A
+        // thread for every render that builds a pipeline (LLVM's compile, on lavapipe) made the
+        // soak test's resident memory climb by tens of MB over 120 renders (glibc's arenas), and
+        // later renders find most of their pipelines built.
+        let ahead_on_a_thread =
+            self.pipelines_on_a_thread && !self.built_ahead && !ahead.is_empty();
+        self.built_ahead |= ahead_on_a_thread;
+        let mut prepare = || {
+            self.environment(gpu, &scene.environment, (model, integral))
                 .and_then(|env_index| {
                     self.upload_meshes(gpu, &meshes)?;
                     self.draw.albedo_ahead(&draw_scene(None));
                     Ok(env_index)
+                })
+        };
+        let (env_index, built) = match ahead_on_a_thread {
+            false => (prepare(), ahead.build(gpu)),
+            true => std::thread::scope(|scope| {
+                let building = scope.spawn(|| ahead.build(gpu));
+                let prepared = prepare();
+                let built = building.join().unwrap_or_else(|_| {
+                    Err(crate::Error::invalid(
+                        "pipeline build",
+                        "panicked",
+                        "report this as a bug",
+                    ))
                 });
-            let built = building.join().unwrap_or_else(|_| {
-                Err(crate::Error::invalid(
-                    "pipeline build",
-                    "panicked",
-                    "report this as a bug",
-                ))
-            });
-            (prepared, built)
-        });
+                (prepared, built)
+            }),
+        };
         let env_index = env_index?;
         self.draw.add_pipelines(built?);
         let gpu_meshes: Vec<&GpuMesh> = meshes

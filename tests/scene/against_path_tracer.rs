@@ -9,100 +9,32 @@
 use std::path::Path;
 
 use crate::common::{assert_no_validation_messages, validated_gpu};
-use shikki::environment::{load_environment, EnvironmentSource};
-use shikki::oracle::path_tracer::{self, PathEnvironment, PathImage, PathScene};
-use shikki::oracle::shadows::TracedObject;
+use shikki::bench::rays::SPHERE_ON_BOARD;
+use shikki::environment::EnvironmentModel;
+use shikki::oracle::path_scene::OwnedPathScene;
 use shikki::output::HdrImage;
-use shikki::raster::mesh_io::transform_mesh;
-use shikki::scene::{parse_scene_str, EnvironmentSpec, MeshSource, Scene, SceneRenderer};
+use shikki::scene::{parse_scene_str, EnvironmentSpec, Scene, SceneRenderer};
 
-/// The issue's scene at 32², one sample per pixel (the path tracer shoots one ray through each
-/// pixel centre), `brdf` model.
-const SPHERE_ON_BOARD: &str = r#"
-[camera]
-eye = [0.4, 2.6, 3.2]
-target = [0.0, 0.3, 0.0]
-fov_deg = 40
-[[object]]
-mesh = "builtin:sphere"
-scale = 0.5
-translate = [0.0, 0.5, 0.0]
-material = { preset = "smooth-red" }
-[[object]]
-mesh = "builtin:board"
-scale = [1.5, 1.0, 1.5]
-material = { preset = "smooth-black" }
-[[light]]
-kind = "dir"
-to_light = [0.6, 0.7, 0.4]
-irradiance = [2.0, 1.9, 1.8]
-[environment]
-source = "builtin:studio"
-rotation_deg = 40
-[render]
-environment_model = "brdf"
-[output]
-size = "32x32"
-samples = 1
-"#;
+/// The issue's scene (`shikki bench`'s) at 32², one sample per pixel (the path tracer shoots one
+/// ray through each pixel centre), `brdf` model, the map turned so that a light box's reflection
+/// in the board meets the sphere.
+fn sphere_on_board() -> Scene {
+    let mut scene = parse_scene_str(SPHERE_ON_BOARD, "sphere-on-board.toml", Path::new("."))
+        .expect("the bench's scene parses");
+    scene.output.width = 32;
+    scene.output.height = 32;
+    scene.output.samples = 1;
+    scene.render.environment_model = EnvironmentModel::Brdf;
+    let EnvironmentSpec::Map { light, .. } = &mut scene.environment else {
+        panic!("the bench's scene has a map");
+    };
+    light.rotation_deg = 40.0;
+    scene
+}
 
-/// Paths per pixel of the reference: its own noise (printed, ~1.3 %) is taken out of each
+/// Paths per pixel of the reference: its own noise (printed, ~1.5 %) is taken out of each
 /// figure before the bound.
 const REFERENCE_PATHS: u32 = 8192;
-
-/// The path tracer's image of `scene` with `bounces` sampled reflections.
-fn path_traced(scene: &Scene, bounces: u32) -> PathImage {
-    let meshes: Vec<_> = scene
-        .objects
-        .iter()
-        .map(|object| match &object.mesh {
-            MeshSource::Builtin(builtin) => transform_mesh(&builtin.mesh(), object.transform),
-            other => panic!("the scene has built-in meshes only, not {other:?}"),
-        })
-        .collect();
-    let materials: Vec<_> = scene
-        .objects
-        .iter()
-        .map(|o| {
-            (
-                o.material.brdf_params().unwrap(),
-                o.material.fresnel_table().unwrap(),
-            )
-        })
-        .collect();
-    let objects: Vec<_> = meshes
-        .iter()
-        .zip(&materials)
-        .map(|(mesh, (brdf, fresnel))| TracedObject {
-            mesh,
-            brdf,
-            fresnel,
-        })
-        .collect();
-    let EnvironmentSpec::Map {
-        source: EnvironmentSource::Named(name),
-        light,
-    } = &scene.environment
-    else {
-        panic!("the scene names its map");
-    };
-    let image = load_environment(name).unwrap().image;
-    path_tracer::render(
-        &PathScene {
-            objects: &objects,
-            camera: &scene.camera,
-            lights: &scene.lights,
-            environment: PathEnvironment::Map {
-                image: &image,
-                light: *light,
-            },
-        },
-        (scene.output.width, scene.output.height),
-        bounces,
-        REFERENCE_PATHS,
-        3,
-    )
-}
 
 /// Whole-image relative RMSE √(Σ (a − b)² / Σ b²) over every channel of the pixels both cover.
 fn relative_rmse(image: &HdrImage, reference: &HdrImage) -> f64 {
@@ -118,21 +50,6 @@ fn relative_rmse(image: &HdrImage, reference: &HdrImage) -> f64 {
     (squares / norm).sqrt()
 }
 
-/// The reference's own noise as a relative RMSE: its standard errors against its values.
-fn reference_noise(reference: &PathImage) -> f64 {
-    let (mut noise, mut norm) = (0.0, 0.0);
-    for (pixel, error) in reference.mean.pixels.iter().zip(&reference.std_error) {
-        if pixel[3] == 1.0 {
-            noise += 3.0 * error * error;
-            norm += pixel[..3]
-                .iter()
-                .map(|&c| f64::from(c).powi(2))
-                .sum::<f64>();
-        }
-    }
-    (noise / norm).sqrt()
-}
-
 /// The issue's held-out bound at 256 rays, on the issue's scene under a real map (turned, so
 /// that a light box's reflection in the board meets the sphere), one and two bounces:
 /// whole-image relative RMSE beyond the reference's noise ≤ 3 %. Measured 2.7 / 2.8 % here
@@ -144,15 +61,17 @@ fn reference_noise(reference: &PathImage) -> f64 {
 #[test]
 fn the_sphere_on_a_board_under_a_map_agrees_with_the_path_tracer() {
     let gpu = validated_gpu();
-    let scene = parse_scene_str(SPHERE_ON_BOARD, "sphere-on-board.toml", Path::new(".")).unwrap();
+    let scene = sphere_on_board();
     if scene.render.ray_tracing_on(&gpu).is_none() {
         eprintln!("skipped: {} traces no rays", gpu.info().name);
         return;
     }
+    let owned = OwnedPathScene::of(&scene).unwrap();
     let mut renderer = SceneRenderer::new(&gpu).unwrap();
     for bounces in [1, 2] {
-        let reference = path_traced(&scene, bounces);
-        let noise = reference_noise(&reference);
+        let size = (scene.output.width, scene.output.height);
+        let reference = owned.render(size, bounces, REFERENCE_PATHS, 3);
+        let noise = reference.relative_noise();
         eprintln!(
             "bounces {bounces}: path tracer, {REFERENCE_PATHS} paths: noise {:.2} %",
             100.0 * noise

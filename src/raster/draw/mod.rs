@@ -478,6 +478,11 @@ impl DeferredKeys {
 pub struct PipelinesAhead(Vec<PipelineKey>);
 
 impl PipelinesAhead {
+    /// Whether every pipeline the draw needs is built already.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
     /// Builds the pipelines (on any thread; Vulkan's pipeline cache is internally synchronised).
     pub fn build(self, gpu: &GpuContext) -> Result<BuiltAhead> {
         let mut built = Vec::with_capacity(self.0.len());
