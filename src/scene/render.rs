@@ -198,16 +198,18 @@ impl SceneRenderer {
             }
             EnvironmentSpec::None => None,
         };
-        let ahead = self
-            .draw
-            .pipelines_ahead(gpu, &draw_scene(None), (settings.samples, layers));
         // Only the first: what it saves is the start of a one-render process (the CLI's). A
         // thread for every render that builds a pipeline (LLVM's compile, on lavapipe) made the
         // soak test's resident memory climb by tens of MB over 120 renders (glibc's arenas), and
-        // later renders find most of their pipelines built.
-        let ahead_on_a_thread =
-            self.pipelines_on_a_thread && !self.built_ahead && !ahead.is_empty();
-        self.built_ahead |= ahead_on_a_thread;
+        // later renders find most of their pipelines built. Without the thread the draw builds
+        // what it lacks, after the preparation has succeeded.
+        let ahead = (self.pipelines_on_a_thread && !self.built_ahead)
+            .then(|| {
+                self.draw
+                    .pipelines_ahead(gpu, &draw_scene(None), (settings.samples, layers))
+            })
+            .filter(|ahead| !ahead.is_empty());
+        self.built_ahead |= ahead.is_some();
         let mut prepare = || {
             self.environment(gpu, &scene.environment, (model, integral))
                 .and_then(|env_index| {
@@ -216,9 +218,9 @@ impl SceneRenderer {
                     Ok(env_index)
                 })
         };
-        let (env_index, built) = match ahead_on_a_thread {
-            false => (prepare(), ahead.build(gpu)),
-            true => std::thread::scope(|scope| {
+        let (env_index, built) = match ahead {
+            None => (prepare(), None),
+            Some(ahead) => std::thread::scope(|scope| {
                 let building = scope.spawn(|| ahead.build(gpu));
                 let prepared = prepare();
                 let built = building.join().unwrap_or_else(|_| {
@@ -228,11 +230,13 @@ impl SceneRenderer {
                         "report this as a bug",
                     ))
                 });
-                (prepared, built)
+                (prepared, Some(built))
             }),
         };
         let env_index = env_index?;
-        self.draw.add_pipelines(built?);
+        if let Some(built) = built {
+            self.draw.add_pipelines(built?);
+        }
         let gpu_meshes: Vec<&GpuMesh> = meshes
             .iter()
             .filter_map(|mesh| {
