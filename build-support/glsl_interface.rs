@@ -60,8 +60,12 @@ pub trait Integer {
 }
 
 impl Integer for u32 {
+    /// A value above `int`'s range is written as a `uint` literal, which GLSL needs for it.
     fn glsl(&self) -> String {
-        self.to_string()
+        match i32::try_from(*self) {
+            Ok(_) => self.to_string(),
+            Err(_) => format!("{self}u"),
+        }
     }
 }
 

@@ -35,7 +35,7 @@ layout(set = 0, binding = ENV_LAYER_TEXELS_BINDING) uniform textureBuffer env_la
 
 // Lobe samples of filtered importance sampling where the camera looks and at the paths' hits
 // (brdf_quadrature.rs `BRDF_SAMPLES`, `BRDF_HIT_SAMPLES`).
-layout(constant_id = ENV_SAMPLES_ID) const int ENV_SAMPLES = 128;
+layout(constant_id = ENV_SAMPLES_ID) const int ENV_SAMPLES = 1024;
 layout(constant_id = ENV_HIT_SAMPLES_ID) const int ENV_HIT_SAMPLES = 32;
 
 // (face, sc, tc) of a direction by the Vulkan face-selection table (src/environment/cube.rs
@@ -432,8 +432,9 @@ vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv, int samples, int ba
     vec3 weights = vec3(0.0);
     for (int i = 0; i < samples; ++i) {
         float u = (float(i) + 0.5) / float(samples);
-        // The Fibonacci lattice (twin: `fibonacci_point`).
-        float w = fract(float(i) * GOLDEN_FRACTION);
+        // The Fibonacci lattice (twin: `fibonacci_point`): the azimuth's fraction of a turn in
+        // 24-bit fixed point, exact in f32.
+        float w = float((uint(i) * FIBONACCI_STEP) >> 8u) * (1.0 / 16777216.0);
         // u = 1 − exp(−tan²θ_H/m²): the Beckmann lobe's distribution of D·cos θ_H.
         float rest = 1.0 - u;
         float tan2 = -m2 * log(rest);
@@ -456,10 +457,11 @@ vec3 specular_fis(LacquerParams p, vec3 n, vec3 v, float nv, int samples, int ba
 // ∫ f_spec(N, V, s)·L(s)·(N·s) dω_s at a surface point (unit n, v; nv = N·V > 0): the bright
 // lights, plus the residual's lookups by the lattice, the grid, filtered importance sampling, or
 // two of them blended, as `quadrature_shares` says for the material, with `samples` lobe samples
-// for filtered importance sampling; the grid serves the points the camera sees (samples ≥
-// ENV_SAMPLES), not a path's hits (twin: `brdf_specular`).
+// for filtered importance sampling; the grid serves the points the camera sees (samples above
+// ENV_HIT_SAMPLES: ENV_SAMPLES, or ENV_VARIATE_SAMPLES for `paper`'s control variate), not a
+// path's hits (twin: `brdf_specular`).
 vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv, int samples) {
-    bool camera = samples >= ENV_SAMPLES;
+    bool camera = samples > ENV_HIT_SAMPLES;
     vec3 shares = quadrature_shares(p.beckmann_m, camera);
     // Where the camera looks the grid and filtered importance sampling read the rough split, and
     // the lattice from frame.env_lattice_share.y up (below it the rough split's blocks are too

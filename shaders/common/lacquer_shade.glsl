@@ -150,6 +150,8 @@ vec3 lacquer_radiance_towards(LacquerParams p, vec3 view_blur, vec3 position, ve
 // renderer attaches one to the environment of a `paper` draw that estimates the integral,
 // EnvironmentPreparer::attach_bright; a map uploaded without one is read whole): the variate
 // then adds h·(this − the integral), the quadrature's error where the environment is hidden.
+// It reads ENV_VARIATE_SAMPLES lobe samples, not ENV_SAMPLES: the variate needs only an estimate
+// of the integral, and `paper` renders of wide lobes should not pay the `brdf` model's accuracy.
 vec3 integral_environment(LacquerParams p, vec3 n, vec3 v, vec3 environment) {
 #ifdef BRDF_ENVIRONMENT_MODEL
     return environment;
@@ -160,7 +162,7 @@ vec3 integral_environment(LacquerParams p, vec3 n, vec3 v, vec3 environment) {
         return vec3(0.0);
     }
     vec3 f_diff = view_dependent_diffuse(p, nv2);
-    return brdf_environment_specular(p, n, v, nv, ENV_SAMPLES)
+    return brdf_environment_specular(p, n, v, nv, ENV_VARIATE_SAMPLES)
         + f_diff * textureLod(env_irradiance, n, 0.0).rgb;
 #endif
 }

@@ -5,8 +5,6 @@
 
 const float PI = 3.14159265358979323846;
 const float HALF_PI = 1.57079632679489661923;
-// (√5 − 1)/2: the Fibonacci lattice's step.
-const float GOLDEN_FRACTION = 0.61803398874989484820;
 
 // acos on [0, 1] (Abramowitz & Stegun 4.4.46): sqrt(1 − x)·Σ a_i x^i, |error| ≤ 2e-8.
 float acos_unit(float x) {

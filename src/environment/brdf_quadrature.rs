@@ -17,15 +17,18 @@ use super::bright::BrightLight;
 use super::cube::{direction_to_face, face_direction};
 use super::image::{CubeImage, PrefilteredEnvironment};
 use super::params::layer_blend;
-use crate::gpu::shaders::interface::{ALBEDO_KNOTS, BRIGHT_LOBE_CULL};
+use crate::gpu::shaders::interface::{ALBEDO_KNOTS, BRIGHT_LOBE_CULL, FIBONACCI_STEP};
 use crate::model::brdf::cook_torrance_g;
 use crate::model::{BrdfParams, FresnelTable};
 
 /// Lobe samples per point the camera sees (the shaders' `ENV_SAMPLES`), for the materials
 /// filtered importance sampling serves (m above `LATTICE_M_LO`): the cost and accuracy are
 /// measured in BENCHMARKS.md ("The `brdf` environment model"). At 32 a rough sphere under a
-/// studio map was 6 % off in its inner part; at 128, 2.3 %.
-pub const BRDF_SAMPLES: u32 = 128;
+/// studio map was 6 % off in its inner part; at 128, 2.3 %. At 128 the courtyard's 112 points
+/// were still 2.5 % off on average at m = 0.5 (p99 18 %), at 512 1.0 % (5.7 %), at 1,024 0.46 %
+/// (3.9 %): the lookups' blur widens the lobe by a share that falls as 1/samples. Only the
+/// materials above `FIS_M_LO` pay for it (the presets use the lattice and the grid).
+pub const BRDF_SAMPLES: u32 = 1024;
 
 /// Lobe samples at the hits of the light between objects' paths (`ENV_HIT_SAMPLES`): every
 /// ray pays them, and the paths' own noise is larger than the quadrature's error at 32.
@@ -98,11 +101,13 @@ impl AlbedoCache {
 
 /// Point i of n of the Fibonacci lattice: ((i + ½)/n, frac(i·(√5 − 1)/2)). Against the Hammersley
 /// set (radical inverse of i in base 2) it cut the rough materials' error on the courtyard by a
-/// fifth at the same count (BENCHMARKS.md, "The `brdf` environment model").
+/// fifth at the same count (BENCHMARKS.md, "The `brdf` environment model"). The azimuth is the
+/// golden fraction's multiple in fixed point (`FIBONACCI_STEP`), the top 24 bits of i·step mod
+/// 2³², which the shader holds exactly in f32.
 pub fn fibonacci_point(i: u32, n: u32) -> (f64, f64) {
-    let golden_fraction = (5.0_f64.sqrt() - 1.0) / 2.0;
     let u = (f64::from(i) + 0.5) / f64::from(n);
-    (u, (f64::from(i) * golden_fraction).fract())
+    let turn = i.wrapping_mul(FIBONACCI_STEP) >> 8;
+    (u, f64::from(turn) / f64::from(1u32 << 24))
 }
 
 /// The specular part of the `brdf` model at a surface point with `samples` lobe samples (unit
@@ -571,7 +576,8 @@ impl<'a> BrdfSources<'a> {
 /// The `brdf` model's specular term as the renderer computes it: lookups by the lattice, the
 /// grid, filtered importance sampling with `samples` samples, or two of them blended, as
 /// [`quadrature_shares`] says for the material's m, plus the bright lights. The grid serves the
-/// points the camera sees (`samples` ≥ `BRDF_SAMPLES`); with fewer samples (a path's hit)
+/// points the camera sees (`samples` above `BRDF_HIT_SAMPLES`: `BRDF_SAMPLES`, or
+/// `ENV_VARIATE_SAMPLES` for `paper`'s control variate); at a path's hit (`BRDF_HIT_SAMPLES`)
 /// filtered importance sampling takes its share. Where the camera looks the grid and filtered
 /// importance sampling read the rough split, and the lattice does from [`rough_lattice_m`] up;
 /// each split's lights take the share of the lookups that read its residual. Everything at a
@@ -583,7 +589,7 @@ pub fn brdf_specular(
     n: DVec3,
     v: DVec3,
 ) -> [f64; 3] {
-    let camera = samples >= BRDF_SAMPLES;
+    let camera = samples > BRDF_HIT_SAMPLES;
     let m = material.0.beckmann_m;
     let shares = quadrature_shares(m, camera);
     let lattice_rough = camera && m as f32 >= rough_lattice_m(sources.rough_block_angle);
@@ -676,7 +682,10 @@ mod tests {
 
     #[test]
     fn fibonacci_points_step_by_the_golden_fraction() {
-        let close = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).abs() + (a.1 - b.1).abs() < 1e-12;
+        // The fixed-point azimuth is within 2^-24 of i·(√5 − 1)/2 mod 1.
+        let close = |a: (f64, f64), b: (f64, f64)| {
+            (a.0 - b.0).abs() < 1e-12 && (a.1 - b.1).abs() < 1.0 / f64::from(1u32 << 24)
+        };
         assert!(close(fibonacci_point(0, 4), (0.125, 0.0)));
         assert!(close(
             fibonacci_point(1, 4),

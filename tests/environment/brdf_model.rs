@@ -272,16 +272,17 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 /// integral over the whole map, on the courtyard and studio HDRIs and the disc map, for m = 0.02,
 /// 0.05, 0.2, 0.5: the figures of BENCHMARKS.md ("The `brdf` environment model"). The issue asks
 /// for ≤ 1 % mean and ≤ 5 % p99: the disc map meets it at every m (the split took the disc out of
-/// the lookups) and is held to it; the courtyard and the studio do not (the lookups' aliasing of
-/// sharp edges, and relative errors of a few % where a dark point sits beside bright ones,
-/// BENCHMARKS.md: 1–3 % mean), so every mean is also held to at most 1.25× its measured value,
-/// which catches a regression (the estimator is deterministic: the same build gives the same
-/// figures). The studio's means were 4.26 % (m = 0.2) and 14.0 % (0.5) before the rough split,
+/// the lookups) and is held to it, and so is every map at m = 0.5 (filtered importance sampling's
+/// 1,024 samples; at 128 the courtyard read 2.50 % and 18.3 %); the courtyard and the studio do
+/// not at the smaller m (the lookups' aliasing of sharp edges, and relative errors of a few %
+/// where a dark point sits beside bright ones, BENCHMARKS.md: 1–2 % mean), so every mean is also
+/// held to at most 1.25× its measured value, which catches a regression (the estimator is
+/// deterministic: the same build gives the same figures). The studio's means were 4.26 % (m = 0.2) and 14.0 % (0.5) before the rough split,
 /// 3.86 % (0.05) before the lattice read it, 2.23 % before the finer layers
 /// (`BRDF_LAYER_TEXEL`) and the lattice's widest step (`LATTICE_MAX_STEP`), 2.12 % before the
 /// fine layer (`BRDF_FINE_LAYER`, which took m = 0.02 from 2.45 to 1.87 % here and from 2.52 to
-/// 1.60 % on the courtyard); at m = 0.5 it meets the issue's bounds (0.44 %, p99 4.3 %), and its
-/// relative RMSE at m = 0.05 is 0.34 %.
+/// 1.60 % on the courtyard); at m = 0.5 it is 0.15 %, p99 1.3 % (0.44 %, 4.3 % at 128 samples),
+/// and its relative RMSE at m = 0.05 is 0.34 %.
 #[test]
 fn error_at_the_render_sample_count() {
     let courtyard = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/courtyard.hdr");
@@ -296,9 +297,9 @@ fn error_at_the_render_sample_count() {
     let pairs = accuracy_pairs();
     // Measured means (green, relative) per map and m = 0.02, 0.05, 0.2, 0.5; see the doc comment.
     let measured = [
-        [0.0160, 0.0180, 0.0109, 0.0250],
-        [0.0187, 0.0166, 0.0063, 0.0044],
-        [0.0012, 0.0012, 0.0006, 0.0036],
+        [0.0160, 0.0180, 0.0109, 0.0046],
+        [0.0187, 0.0166, 0.0063, 0.0015],
+        [0.0012, 0.0012, 0.0006, 0.0005],
     ];
     for ((name, source), bounds) in maps.iter().zip(measured) {
         let prefilter = PrefilterParams::for_model(source.width, EnvironmentModel::Brdf);
@@ -335,7 +336,7 @@ fn error_at_the_render_sample_count() {
                 mean <= 1.25 * bound,
                 "{name} m {m}: mean {mean}, bound {bound}"
             );
-            if *name == "disc" {
+            if *name == "disc" || m == 0.5 {
                 assert!(mean <= 0.01 && p99 <= 0.05, "{name} m {m}: {mean}, {p99}");
             }
         }

@@ -39,6 +39,18 @@ shader_interface! {
         ALBEDO_KNOTS: usize = 65;
         /// The most MSAA samples per pixel the shading pass reads from the G-buffer.
         MAX_SAMPLES: u32 = 4;
+        /// Lobe samples of filtered importance sampling in `paper`'s control variate of the light
+        /// between objects (lacquer_shade.glsl `integral_environment`): the `brdf` model's
+        /// quadrature as it was at 128 samples, the camera's configuration otherwise. The `brdf`
+        /// model's own 1,024 (`BRDF_SAMPLES`) took a ray-traced `paper` render of a 512² m = 0.5
+        /// sphere from 1.8 to 7.1 s on lavapipe.
+        ENV_VARIATE_SAMPLES: u32 = 128;
+        /// The golden fraction (√5 − 1)/2 in 32-bit fixed point: point i of the Fibonacci
+        /// lattice of the `brdf` model's filtered importance sampling has the azimuth fraction
+        /// given by the top 24 bits of i·FIBONACCI_STEP mod 2³², exact in f32 and f64 alike
+        /// (brdf_quadrature.rs `fibonacci_point`). fract(i·0.618…) in f32 is off by up to 3e-5
+        /// of a turn at i ≈ 1000, which put the shader 2e-4 from its twin at 1,024 samples.
+        FIBONACCI_STEP: u32 = 2_654_435_769;
         /// Newton steps of the visible-normal sampler's slope inversion (visible_normals.glsl,
         /// oracle/visible_normals.rs): from its fitted first guess the CDF's residual is 1.8e-7
         /// after 4 (measured there); 10 leaves room for the steps that bisect.
