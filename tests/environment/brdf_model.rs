@@ -277,12 +277,12 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 /// not at the smaller m (the lookups' aliasing of sharp edges, and relative errors of a few %
 /// where a dark point sits beside bright ones, BENCHMARKS.md: 1–2 % mean), so every mean is also
 /// held to at most 1.25× its measured value, which catches a regression (the estimator is
-/// deterministic: the same build gives the same figures). The studio's means were 4.26 % (m = 0.2) and 14.0 % (0.5) before the rough split,
-/// 3.86 % (0.05) before the lattice read it, 2.23 % before the finer layers
-/// (`BRDF_LAYER_TEXEL`) and the lattice's widest step (`LATTICE_MAX_STEP`), 2.12 % before the
-/// fine layer (`BRDF_FINE_LAYER`, which took m = 0.02 from 2.45 to 1.87 % here and from 2.52 to
-/// 1.60 % on the courtyard); at m = 0.5 it is 0.15 %, p99 1.3 % (0.44 %, 4.3 % at 128 samples),
-/// and its relative RMSE at m = 0.05 is 0.34 %.
+/// deterministic: the same build gives the same figures). The studio's means were 4.26 %
+/// (m = 0.2) and 14.0 % (0.5) before the rough split, 3.86 % (0.05) before the lattice read it,
+/// 2.23 % before the finer layers (`BRDF_LAYER_TEXEL`) and the lattice's widest step
+/// (`LATTICE_MAX_STEP`), 2.12 % before the fine layer (`BRDF_FINE_LAYER`, which took m = 0.02
+/// from 2.45 to 1.87 % here and from 2.52 to 1.60 % on the courtyard); at m = 0.5 it is 0.15 %,
+/// p99 1.3 % (0.44 %, 4.3 % at 128 samples), and its relative RMSE at m = 0.05 is 0.34 %.
 #[test]
 fn error_at_the_render_sample_count() {
     let courtyard = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/courtyard.hdr");
