@@ -135,14 +135,6 @@ vec3 layered_radiance_pair(vec3 d, int k0, float t, int base) {
     return lo + (hi - lo) * t;
 }
 
-// Lpre(d, β) (twin: `layered_radiance`).
-vec3 layered_radiance(vec3 d, float beta, int base) {
-    int k0;
-    float t;
-    layer_pair(beta, k0, t);
-    return layered_radiance_pair(d, k0, t, base);
-}
-
 // A(nv) from the object's ALBEDO_KNOTS knots (nv, A_r, A_g, A_b) at nv = (k/(ALBEDO_KNOTS − 1))²
 // among the Fresnel knots, linear in √nv between knots (twin of brdf_quadrature.rs `albedo_at`).
 vec3 albedo_at(int first, float nv) {
@@ -291,7 +283,7 @@ void add_lookup(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, flo
     float beta, int base, inout vec3 sum, inout vec3 weights) {
     int k0;
     float t;
-    layer_pair(beta, k0, t);
+    layer_pair_of_run(beta, k0, t);
     add_lookup_pair(p, n, v, nv, h, vh, scale, k0, t, base, sum, weights);
 }
 
@@ -352,7 +344,7 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
     // Every node reads the same blur: its layers and blend found once.
     int k0;
     float t;
-    layer_pair(beta, k0, t);
+    layer_pair_of_run(beta, k0, t);
     vec3 sum = vec3(0.0);
     vec3 weights = vec3(0.0);
     for (int i = -half_count; i <= half_count; ++i) {

@@ -63,6 +63,36 @@ void layer_pair(float beta, out int k0, out float t) {
     }
 }
 
+// `layer_pair` without its run over the layers, for the `brdf` model's lookups (up to 1,024 a
+// pixel, where the run was a quarter of the time): above layer g the layers' β are a geometric
+// run (frame.layer_run; g = 2 after a fine layer), so the pair is where ln β falls on it. At a
+// boundary rounding may give the neighbouring pair with t at 1 or 0 instead, the same blend.
+// Where the layers are not such a run (never, from PrefilterParams) it is `layer_pair`. The
+// `paper` model's one lookup a pixel keeps `layer_pair`, so its images stay what they were.
+void layer_pair_of_run(float beta, out int k0, out float t) {
+    vec4 run = frame.layer_run;
+    if (run.w == 0.0) {
+        layer_pair(beta, k0, t);
+        return;
+    }
+    int count = ENV_LAYER_COUNT;
+    float beta1 = layer_beta(1);
+    float log_beta = log(beta);
+    float x = (log_beta - run.y) * run.z;
+    float whole = floor(x);
+    int k = int(run.x) + int(whole);
+    bool past = k >= count - 1;
+    k0 = past ? count - 1 : k;
+    t = past ? 0.0 : x - whole;
+    // Below the run: between layer 1 and layer g = 2 (the fine layer), or below layer 1.
+    float log1 = layer_log_beta(1);
+    bool below = x < 0.0;
+    k0 = below ? (beta < beta1 ? 0 : 1) : k0;
+    t = below ? (beta < beta1 ? beta / beta1 : (log_beta - log1) / (run.y - log1)) : t;
+    k0 = beta > 0.0 ? k0 : 0;
+    t = beta > 0.0 ? t : 0.0;
+}
+
 // Lpre(dir, β) of SPEC §4 from the layers (`layer_pair`), with the sampler's filtering.
 //
 // Why a weighted sum over all K layers instead of sampling the two that matter: the pair differs

@@ -224,6 +224,12 @@ shader_interface! {
             /// (the `brdf` model's lookups), four per ivec4.
             layer_face_size: [ivec4; MAX_ENV_LAYERS / 4],
             layer_first_texel: [ivec4; MAX_ENV_LAYERS / 4],
+            /// The layers' geometric run (SPEC §4: β_k = β_min·(β_max/β_min)^(…) from layer g on;
+            /// g = 2 after a fine layer): x = g, y = ln β_g, z = 1/Δ with Δ the run's step in ln β,
+            /// w = 1 where the β above are that run (raster/draw/frame.rs `geometric_run`), 0
+            /// otherwise. The `brdf` model's lookups find their layers from it without a search
+            /// (frame.glsl `layer_pair_of_run`).
+            layer_run: vec4,
             /// The camera basis (world), for the background's primary rays; `camera_back` is the
             /// negated view direction.
             camera_right: vec4,

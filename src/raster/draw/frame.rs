@@ -108,6 +108,26 @@ fn pack_light(light: &BrightLight) -> ([f32; 4], [f32; 4]) {
     )
 }
 
+/// The layers' geometric run as the shader's `layer_pair_of_run` reads it: (g, ln β_g, Δ), g the
+/// first layer (1, or 2 after a fine layer) from which ln β_k = ln β_g + (k − g)·Δ to the last,
+/// within 1e-5 (the f32 β the shader compares against: its `layer_pair` finds the same pair up
+/// to rounding at a boundary, where either pair gives the same blend). `None` with fewer than two
+/// layers in the run, or none: the shader then searches (`layer_pair`).
+fn geometric_run(betas: &[f64]) -> Option<(usize, f64, f64)> {
+    let logs: Vec<f64> = betas.iter().map(|&b| f64::from(b as f32).ln()).collect();
+    let last = logs.len().checked_sub(1)?;
+    (1..=2).find_map(|g| {
+        if last <= g || !betas[g..].iter().all(|&b| b > 0.0) {
+            return None;
+        }
+        let step = (logs[last] - logs[g]) / (last - g) as f64;
+        let on_run =
+            (g..=last).all(|k| (logs[k] - (logs[g] + (k - g) as f64 * step)).abs() <= 1e-5);
+        (step > 0.0 && on_run && (g == 1 || (betas[1] > 0.0 && betas[1] < betas[2])))
+            .then_some((g, logs[g], step))
+    })
+}
+
 impl Frame {
     /// Packs the environment layers' β, ln β, face sizes and first texels (the `brdf` model's
     /// lookups); also used by the compute evaluator of the `brdf` model.
@@ -124,6 +144,10 @@ impl Frame {
             // GpuEnvironment::layer_texels refuses more texels than an i32 indexes.
             self.layer_first_texel[k / 4][k % 4] = first as i32;
         }
+        self.layer_run = match geometric_run(&betas[..betas.len().min(MAX_ENV_LAYERS)]) {
+            Some((g, log_beta, step)) => [g as f32, log_beta as f32, (1.0 / step) as f32, 1.0],
+            None => [0.0; 4],
+        };
     }
 
     /// Packs the `brdf` model's quadrature constants (the lattice's and the grid's and their
@@ -494,5 +518,25 @@ mod tests {
             cache.texels(spread.clone(), 0.06),
             light_bin_texels(&spread, 0.06)
         );
+    }
+
+    /// SPEC's series is a geometric run from layer 1; the `brdf` model's from layer 2, after its
+    /// fine layer; a series that is not one (above layer 2) has none, and the shader searches.
+    #[test]
+    fn geometric_run_of_the_prefilters_layers() {
+        use crate::environment::{EnvironmentModel, PrefilterParams};
+        let betas = |p: PrefilterParams| (0..p.layers).map(|k| p.beta(k)).collect::<Vec<_>>();
+        let run = geometric_run;
+        let paper = betas(PrefilterParams::for_model(1024, EnvironmentModel::Paper));
+        let (g, log, step) = run(&paper).unwrap();
+        assert_eq!(g, 1);
+        assert!((log - f64::from(paper[1] as f32).ln()).abs() < 1e-12);
+        assert!((step - 50f64.ln() / 6.0).abs() < 1e-6, "{step}");
+        let brdf = betas(PrefilterParams::for_model(1024, EnvironmentModel::Brdf));
+        let (g, _, step) = run(&brdf).unwrap();
+        assert_eq!(g, 2);
+        assert!((step - (brdf[3] / brdf[2]).ln()).abs() < 1e-6);
+        assert_eq!(run(&[0.0, 0.1, 0.2, 0.5, 0.6]), None);
+        assert_eq!(run(&[0.0, 0.1]), None);
     }
 }
