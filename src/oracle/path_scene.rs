@@ -10,8 +10,7 @@ use crate::environment::{load_environment, EnvironmentLight, EnvironmentSource, 
 use crate::model::{BrdfParams, FresnelTable};
 use crate::raster::mesh_io::transform_mesh;
 use crate::raster::{Camera, Light, Mesh};
-use crate::scene::parse::cached_file_mesh;
-use crate::scene::{EnvironmentSpec, MeshSource, Scene};
+use crate::scene::{EnvironmentSpec, Scene};
 use crate::Result;
 
 /// What [`path_tracer::render`] needs of a scene, owned.
@@ -30,13 +29,9 @@ impl OwnedPathScene {
         let mut meshes = Vec::with_capacity(scene.objects.len());
         let mut materials = Vec::with_capacity(scene.objects.len());
         for object in &scene.objects {
-            let base = match &object.mesh {
-                MeshSource::Builtin(builtin) => builtin.mesh(),
-                MeshSource::File(path) => (*cached_file_mesh(path)?).clone(),
-                MeshSource::Inline(mesh) => (**mesh).clone(),
-            };
+            let base = object.mesh.load()?;
             meshes.push(match object.transform == DMat4::IDENTITY {
-                true => base,
+                true => (*base).clone(),
                 false => transform_mesh(&base, object.transform),
             });
             materials.push((

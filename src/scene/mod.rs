@@ -61,6 +61,18 @@ pub enum MeshSource {
     Inline(Arc<Mesh>),
 }
 
+impl MeshSource {
+    /// The mesh in its own frame: a builtin made anew, a file from the process's file cache
+    /// (`parse::cached_file_mesh`), an inline mesh shared.
+    pub fn load(&self) -> Result<Arc<Mesh>> {
+        Ok(match self {
+            MeshSource::Builtin(builtin) => Arc::new(builtin.mesh()),
+            MeshSource::File(path) => parse::cached_file_mesh(path)?,
+            MeshSource::Inline(mesh) => mesh.clone(),
+        })
+    }
+}
+
 /// The environment light (SPEC §4).
 #[derive(Clone, PartialEq)]
 pub enum EnvironmentSpec {

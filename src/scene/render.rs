@@ -13,7 +13,6 @@
 
 use std::sync::Arc;
 
-use super::parse::cached_file_mesh;
 use super::{EnvironmentSpec, MeshSource, Scene};
 use crate::environment::disk_cache::EnvironmentDiskCache;
 use crate::environment::gpu::GpuEnvironment;
@@ -291,18 +290,15 @@ impl SceneRenderer {
     }
 
     fn base_mesh(&mut self, source: &MeshSource) -> Result<Arc<Mesh>> {
-        Ok(match source {
-            MeshSource::Builtin(builtin) => {
-                if let Some((_, mesh)) = self.builtin.iter().find(|(b, _)| b == builtin) {
-                    return Ok(mesh.clone());
-                }
-                let mesh = Arc::new(builtin.mesh());
-                self.builtin.push((*builtin, mesh.clone()));
-                mesh
-            }
-            MeshSource::File(path) => cached_file_mesh(path)?,
-            MeshSource::Inline(mesh) => mesh.clone(),
-        })
+        let MeshSource::Builtin(builtin) = source else {
+            return source.load();
+        };
+        if let Some((_, mesh)) = self.builtin.iter().find(|(b, _)| b == builtin) {
+            return Ok(mesh.clone());
+        }
+        let mesh = source.load()?;
+        self.builtin.push((*builtin, mesh.clone()));
+        Ok(mesh)
     }
 
     /// The mesh in world space; identical placements of a mesh are transformed once.
