@@ -9,10 +9,14 @@
 //! - a board (N = +Y, 2 × 2 units) seen from 4 units away at 25° and 60° elevation, 32 × 32 points:
 //!   relative RMSE.
 //!
+//! With `--images`, instead: the issue's images, mean and p99 relative difference and relative
+//! RMSE of an orthographic sphere of 128 × 128 pixels seen from +Z (every covered pixel's
+//! centre) and of the board seen at 10°, 45° and 80° from its normal (32 × 32 points each).
+//!
 //! Green channel, the map at intensity 1 and rotation 0.
 //!
 //! ```text
-//! cargo run --release --example brdf_accuracy -- assets/env/courtyard.hdr 0.05,0.2
+//! cargo run --release --example brdf_accuracy -- assets/env/courtyard.hdr 0.05,0.2 [--images]
 //! ```
 //!
 //! The reference is slow (3 × 3 sub-cells per pixel for m < 0.1): about two minutes per m on two
@@ -33,8 +37,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let (Some(path), Some(list)) = (args.get(1), args.get(2)) else {
         return Err(
-            "usage: brdf_accuracy MAP M[,M…]   (e.g. assets/env/studio.hdr 0.05,0.2)".into(),
+            "usage: brdf_accuracy MAP M[,M…] [--images]   (e.g. assets/env/studio.hdr 0.05,0.2)"
+                .into(),
         );
+    };
+    let images = match args.get(3).map(String::as_str) {
+        None => false,
+        Some("--images") => true,
+        Some(other) => return Err(format!("unknown option '{other}' (only --images)").into()),
     };
     let ms = list
         .split(',')
@@ -73,6 +83,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let got = brdf_specular(sources, BRDF_SAMPLES, material, n, v);
             (got[1], want[1])
         };
+        if images {
+            let stats = |name: &str, pairs: &[(DVec3, DVec3)]| {
+                let got = evaluate(pairs, &pair);
+                let mut rel: Vec<f64> = got.iter().map(|(g, w)| (g - w).abs() / w).collect();
+                rel.sort_by(f64::total_cmp);
+                println!(
+                    "m {m}: {name}: mean {:.2} %, p99 {:.1} %, relative RMSE {:.2} %",
+                    100.0 * rel.iter().sum::<f64>() / rel.len() as f64,
+                    100.0 * rel[rel.len() * 99 / 100],
+                    100.0 * relative_rmse(&got)
+                );
+            };
+            stats("sphere 128²", &sphere_pixels(128));
+            for angle in [10.0, 45.0, 80.0] {
+                stats(
+                    &format!("board {angle}° from its normal"),
+                    &board_points(90.0 - angle),
+                );
+            }
+            continue;
+        }
         let points = evaluate(&issue_points(), &pair);
         let mut rel: Vec<f64> = points.iter().map(|(g, w)| (g - w).abs() / w).collect();
         rel.sort_by(f64::total_cmp);
@@ -82,7 +113,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             100.0 * rel[rel.len() * 99 / 100],
             100.0 * relative_rmse(&points)
         );
-        let sphere = sphere_pixels();
+        let sphere = sphere_pixels(40);
         let got = evaluate(&sphere, &pair);
         let inner: Vec<(f64, f64)> = sphere
             .iter()
@@ -157,11 +188,11 @@ fn issue_points() -> Vec<(DVec3, DVec3)> {
     pairs
 }
 
-/// The covered pixels of a 40 × 40 orthographic sphere seen from +Z: (n, v = +Z).
-fn sphere_pixels() -> Vec<(DVec3, DVec3)> {
-    let centre = |i: u32| (f64::from(i) + 0.5) / 20.0 - 1.0;
-    (0..40 * 40)
-        .map(|k| (centre(k % 40), centre(k / 40)))
+/// The covered pixels of a `size` × `size` orthographic sphere seen from +Z: (n, v = +Z).
+fn sphere_pixels(size: u32) -> Vec<(DVec3, DVec3)> {
+    let centre = |i: u32| (f64::from(i) + 0.5) / f64::from(size / 2) - 1.0;
+    (0..size * size)
+        .map(|k| (centre(k % size), centre(k / size)))
         .filter(|(x, y)| x * x + y * y < 1.0)
         .map(|(x, y)| (DVec3::new(x, y, (1.0 - x * x - y * y).sqrt()), DVec3::Z))
         .collect()

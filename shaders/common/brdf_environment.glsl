@@ -69,34 +69,53 @@ void select_face(vec3 d, out int face, out vec2 st, out vec3 axis, out vec3 s_di
     st = vec2(dot(d, s_dir), dot(d, t_dir)) / major;
 }
 
-// The texel of layer k holding direction d, of the layers whose texels start at `base` (0: the
-// residual's; `frame.env_rough.x`: the rough split's residual, laid out the same after them).
-vec3 layer_texel(int k, vec3 d, int base) {
+// A lookup's two layers as `layer_pair_of_run` found them for its β, with where each one's
+// texels are: its face size and its first texel (from `base`: 0 for the residual's layers,
+// `frame.env_rough.x` for the rough split's, laid out the same after them). Read from the frame
+// once per β: a per-lane index into the frame is a gather lane by lane on llvmpipe, and a lattice
+// reads its one pair at every node.
+struct LayerPair {
+    int size0;
+    int first0;
+    int size1;
+    int first1;
+    float t;
+};
+
+LayerPair layer_pair_texels(float beta, int base) {
+    int k0;
+    float t;
+    layer_pair_of_run(beta, k0, t);
+    int k1 = min(k0 + 1, ENV_LAYER_COUNT - 1);
+    return LayerPair(frame.layer_face_size[k0 / 4][k0 % 4],
+        base + frame.layer_first_texel[k0 / 4][k0 % 4], frame.layer_face_size[k1 / 4][k1 % 4],
+        base + frame.layer_first_texel[k1 / 4][k1 % 4], t);
+}
+
+// The texel holding direction d of the layer of face size `size` whose texels start at `first`.
+vec3 layer_texel(int size, int first, vec3 d) {
     int face;
     vec2 st;
     vec3 axis, s_dir, t_dir;
     select_face(d, face, st, axis, s_dir, t_dir);
-    int size = frame.layer_face_size[k / 4][k % 4];
     ivec2 ij = clamp(ivec2(floor((st + 1.0) * 0.5 * float(size))), ivec2(0), ivec2(size - 1));
-    int first = base + frame.layer_first_texel[k / 4][k % 4];
     return texelFetch(env_layer_texels, first + (face * size + ij.y) * size + ij.x).rgb;
 }
 
-// Layer k at the direction d that select_face put at (face, st), bilinear over the four texel
+// That layer at the direction d that select_face put at (face, st), bilinear over the four texel
 // centres around it; each tap is looked up by its direction (for a tap inside the face that is
 // the texel itself).
-vec3 layer_bilinear(int k, int face, vec2 st, vec3 axis, vec3 s_dir, vec3 t_dir, int base) {
-    float size = float(frame.layer_face_size[k / 4][k % 4]);
+vec3 layer_bilinear(int isize, int first, int face, vec2 st, vec3 axis, vec3 s_dir,
+    vec3 t_dir) {
+    float size = float(isize);
     vec2 xy = (st + 1.0) * 0.5 * size - 0.5;
     vec2 xy0 = floor(xy);
     vec2 f = xy - xy0;
     ivec2 ij = ivec2(xy0);
-    int isize = int(size);
     if (all(greaterThanEqual(ij, ivec2(0))) && all(lessThan(ij + 1, ivec2(isize)))) {
         // All four taps inside the face: each is the texel itself, read without a face selection
         // per tap (the same texels the rule below finds).
-        int row = base + frame.layer_first_texel[k / 4][k % 4] + (face * isize + ij.y) * isize
-            + ij.x;
+        int row = first + (face * isize + ij.y) * isize + ij.x;
         vec3 a = texelFetch(env_layer_texels, row).rgb;
         vec3 b = texelFetch(env_layer_texels, row + 1).rgb;
         vec3 c = texelFetch(env_layer_texels, row + isize).rgb;
@@ -108,31 +127,29 @@ vec3 layer_bilinear(int k, int face, vec2 st, vec3 axis, vec3 s_dir, vec3 t_dir,
     // Face coordinates of the tap centres x0, x0 + 1 (and y0, y0 + 1).
     vec2 c0 = 2.0 * (xy0 + 0.5) / size - 1.0;
     vec2 c1 = 2.0 * (xy0 + 1.5) / size - 1.0;
-    vec3 a = layer_texel(k, axis + s_dir * c0.x + t_dir * c0.y, base);
-    vec3 b = layer_texel(k, axis + s_dir * c1.x + t_dir * c0.y, base);
-    vec3 c = layer_texel(k, axis + s_dir * c0.x + t_dir * c1.y, base);
-    vec3 e = layer_texel(k, axis + s_dir * c1.x + t_dir * c1.y, base);
+    vec3 a = layer_texel(isize, first, axis + s_dir * c0.x + t_dir * c0.y);
+    vec3 b = layer_texel(isize, first, axis + s_dir * c1.x + t_dir * c0.y);
+    vec3 c = layer_texel(isize, first, axis + s_dir * c0.x + t_dir * c1.y);
+    vec3 e = layer_texel(isize, first, axis + s_dir * c1.x + t_dir * c1.y);
     vec3 top = a + (b - a) * f.x;
     vec3 bottom = c + (e - c) * f.x;
     return top + (bottom - top) * f.y;
 }
 
-// Lpre(d, β) from the texels from `base`: the same layers and blend as `prefiltered_radiance`,
-// read by hand, with `layer_pair`'s (k0, t) for β already found (a quadrature whose lookups share
-// one β finds them once).
-vec3 layered_radiance_pair(vec3 d, int k0, float t, int base) {
+// Lpre(d, β) from the layers of `pair` (`layer_pair_texels` for β): the same layers and blend as
+// `prefiltered_radiance`, read by hand (a quadrature whose lookups share one β finds them once).
+vec3 layered_radiance_pair(vec3 d, LayerPair pair) {
     // Both layers see d on the same face at the same (s, t).
     int face;
     vec2 st;
     vec3 axis, s_dir, t_dir;
     select_face(d, face, st, axis, s_dir, t_dir);
-    vec3 lo = layer_bilinear(k0, face, st, axis, s_dir, t_dir, base);
-    if (t == 0.0) {
+    vec3 lo = layer_bilinear(pair.size0, pair.first0, face, st, axis, s_dir, t_dir);
+    if (pair.t == 0.0) {
         return lo;
     }
-    vec3 hi = layer_bilinear(min(k0 + 1, ENV_LAYER_COUNT - 1), face, st, axis, s_dir, t_dir,
-        base);
-    return lo + (hi - lo) * t;
+    vec3 hi = layer_bilinear(pair.size1, pair.first1, face, st, axis, s_dir, t_dir);
+    return lo + (hi - lo) * pair.t;
 }
 
 // A(nv) from the object's ALBEDO_KNOTS knots (nv, A_r, A_g, A_b) at nv = (k/(ALBEDO_KNOTS − 1))²
@@ -263,9 +280,9 @@ vec3 binned_rough_bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
 // One lookup of either quadrature: the reflection s of v about the half vector h (vh = V·H > 0),
 // read at β and weighted by scale·F(acos V·H)·G·(V·H)/(nv·nh); nothing where s is below the
 // surface (twin: `LookupSums::add`).
-// `add_lookup` reading the layers at `layer_pair`'s (k0, t).
+// `add_lookup` reading the layers of `pair`.
 void add_lookup_pair(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, float scale,
-    int k0, float t, int base, inout vec3 sum, inout vec3 weights) {
+    LayerPair pair, inout vec3 sum, inout vec3 weights) {
     vec3 s = 2.0 * vh * h - v;
     float nl = dot(n, s);
     if (nl <= 0.0) {
@@ -275,16 +292,13 @@ void add_lookup_pair(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh
     float g = cook_torrance_g(cos_h, nv, nl, vh);
     vec3 f = lacquer_fresnel(p, angle_deg_of_cos(min(vh, 1.0)));
     vec3 weight = f * (scale * g * vh / (nv * cos_h));
-    sum += weight * layered_radiance_pair(s, k0, t, base);
+    sum += weight * layered_radiance_pair(s, pair);
     weights += weight;
 }
 
 void add_lookup(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, float scale,
     float beta, int base, inout vec3 sum, inout vec3 weights) {
-    int k0;
-    float t;
-    layer_pair_of_run(beta, k0, t);
-    add_lookup_pair(p, n, v, nv, h, vh, scale, k0, t, base, sum, weights);
+    add_lookup_pair(p, n, v, nv, h, vh, scale, layer_pair_texels(beta, base), sum, weights);
 }
 
 // Σ w·L / Σ w · A(nv) per channel: exact in a white furnace (twin: `LookupSums::normalized`).
@@ -341,10 +355,8 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
     float beta = max(beta0, 2.0 * step / spacing);
     // At normal incidence σ_p, the reach and the step are 0: the mirror direction alone.
     int half_count = step > 0.0 ? int(min(ceil(reach / step), max_half)) : 0;
-    // Every node reads the same blur: its layers and blend found once.
-    int k0;
-    float t;
-    layer_pair_of_run(beta, k0, t);
+    // Every node reads the same blur: its layers, their texels and the blend found once.
+    LayerPair pair = layer_pair_texels(beta, base);
     vec3 sum = vec3(0.0);
     vec3 weights = vec3(0.0);
     for (int i = -half_count; i <= half_count; ++i) {
@@ -355,7 +367,7 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
         vec3 h = normalize(tangent * slope + n);
         float vh = dot(v, h);
         if (gauss > 0.0 && vh > 0.0) {
-            add_lookup_pair(p, n, v, nv, h, vh, gauss, k0, t, base, sum, weights);
+            add_lookup_pair(p, n, v, nv, h, vh, gauss, pair, sum, weights);
         }
     }
     return normalized_lookups(p, nv, sum, weights);

@@ -63,34 +63,44 @@ void layer_pair(float beta, out int k0, out float t) {
     }
 }
 
-// `layer_pair` without its run over the layers, for the `brdf` model's lookups (up to 1,024 a
-// pixel, where the run was a quarter of the time): above layer g the layers' β are a geometric
-// run (frame.layer_run; g = 2 after a fine layer), so the pair is where ln β falls on it. At a
+// The `brdf` model's layer pair for a lookup at β (up to 1,024 a pixel, where `layer_pair`'s
+// run over the layers was a quarter of the time): above layer g the layers' β are a geometric run
+// (frame.layer_run; g = 2 after a fine layer), so the pair is where ln β falls on it. At a
 // boundary rounding may give the neighbouring pair with t at 1 or 0 instead, the same blend.
-// Where the layers are not such a run (never, from PrefilterParams) it is `layer_pair`. The
-// `paper` model's one lookup a pixel keeps `layer_pair`, so its images stay what they were.
+// Where the layers are not such a run (never, from PrefilterParams) the pair is `layer_pair`'s.
+// The blend is in variance, (1 − t)·β_k² + t·β_(k+1)² = β², with layer 0's β_0² its texels' read
+// variance (twin: brdf_quadrature.rs `layered_radiance`, whose doc says why). The `paper`
+// model's one lookup a pixel keeps `layer_pair`, so its images stay what they were.
 void layer_pair_of_run(float beta, out int k0, out float t) {
     vec4 run = frame.layer_run;
+    float beta1 = layer_beta(1);
+    float beta2 = beta * beta;
+    float h0 = 1.57079633 / float(frame.layer_face_size[0][0]);
+    float e0 = h0 * h0 / float(TEXEL_READ_VARIANCE_RECIPROCAL);
     if (run.w == 0.0) {
         layer_pair(beta, k0, t);
-        return;
+        float lo = k0 == 0 ? e0 : layer_beta(k0) * layer_beta(k0);
+        float hi = layer_beta(min(k0 + 1, ENV_LAYER_COUNT - 1));
+        t = t > 0.0 ? (beta2 - lo) / max(hi * hi - lo, 1e-30) : 0.0;
+    } else {
+        int count = ENV_LAYER_COUNT;
+        float log_beta = log(beta);
+        float x = (log_beta - run.y) * run.z;
+        float whole = floor(x);
+        int k = int(run.x) + int(whole);
+        bool past = k >= count - 1;
+        k0 = past ? count - 1 : k;
+        // On the run β_(k+1)/β_k = e^(1/run.z) and β/β_k = e^((x − whole)/run.z).
+        t = past ? 0.0 : (exp(2.0 * (x - whole) / run.z) - 1.0) / (exp(2.0 / run.z) - 1.0);
+        // Below the run: between layer 1 and layer g = 2 (the fine layer), or below layer 1.
+        bool below = x < 0.0;
+        float under_1 = clamp((beta2 - e0) / max(beta1 * beta1 - e0, 1e-30), 0.0, 1.0);
+        float under_g = (beta2 - beta1 * beta1) / (exp(2.0 * run.y) - beta1 * beta1);
+        k0 = below ? (beta < beta1 ? 0 : 1) : k0;
+        t = below ? (beta < beta1 ? under_1 : under_g) : t;
     }
-    int count = ENV_LAYER_COUNT;
-    float beta1 = layer_beta(1);
-    float log_beta = log(beta);
-    float x = (log_beta - run.y) * run.z;
-    float whole = floor(x);
-    int k = int(run.x) + int(whole);
-    bool past = k >= count - 1;
-    k0 = past ? count - 1 : k;
-    t = past ? 0.0 : x - whole;
-    // Below the run: between layer 1 and layer g = 2 (the fine layer), or below layer 1.
-    float log1 = layer_log_beta(1);
-    bool below = x < 0.0;
-    k0 = below ? (beta < beta1 ? 0 : 1) : k0;
-    t = below ? (beta < beta1 ? beta / beta1 : (log_beta - log1) / (run.y - log1)) : t;
     k0 = beta > 0.0 ? k0 : 0;
-    t = beta > 0.0 ? t : 0.0;
+    t = beta > 0.0 ? clamp(t, 0.0, 1.0) : 0.0;
 }
 
 // Lpre(dir, β) of SPEC §4 from the layers (`layer_pair`), with the sampler's filtering.

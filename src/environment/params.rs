@@ -2,6 +2,7 @@
 //! has, at what face size it is stored, and which downsampled source it is convolved from. The GPU
 //! prefilter (`gpu.rs`) and the CPU oracle (`oracle.rs`) both run exactly this plan.
 
+use crate::gpu::shaders::interface::TEXEL_READ_VARIANCE_RECIPROCAL;
 use crate::{Error, Result};
 
 /// Layers whose weight exp(-(1-c)/β²) falls below exp(-LOBE_CUTOFF) are not summed: 12.5 is 5σ of
@@ -36,6 +37,15 @@ pub const IRRADIANCE_FACE: u32 = 32;
 
 // irradiance.comp loops over all 6·M² source texels; lavapipe cuts loops off at 65535 iterations.
 const _: () = assert!(6 * IRRADIANCE_FACE * IRRADIANCE_FACE < 65535);
+
+/// The variance the texels of a layer of face size `face_size` add when it is read: h²/4 for
+/// texels h = (π/2)/`face_size` radians wide (`TEXEL_READ_VARIANCE_RECIPROCAL`, whose doc derives
+/// it). The `brdf` model's blend between the sharp layer 0 and layer 1 counts it as layer 0's
+/// (brdf_quadrature.rs `layered_radiance`).
+pub fn texel_read_variance(face_size: u32) -> f64 {
+    let h = std::f64::consts::FRAC_PI_2 / f64::from(face_size.max(1));
+    h * h / f64::from(TEXEL_READ_VARIANCE_RECIPROCAL)
+}
 
 /// Limits on what a user may ask for.
 pub const MAX_FACE_SIZE: u32 = 4096;

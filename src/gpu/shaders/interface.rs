@@ -51,6 +51,12 @@ shader_interface! {
         /// (brdf_quadrature.rs `fibonacci_point`). fract(i·0.618…) in f32 is off by up to 3e-5
         /// of a turn at i ≈ 1000, which put the shader 2e-4 from its twin at 1,024 samples.
         FIBONACCI_STEP: u32 = 2_654_435_769;
+        /// A layer of texels h radians wide ((π/2)/face size), each the box average of the source
+        /// mip's (variance h²/12) and read bilinearly (a tent, h²/6), is blurred by h²/4 more
+        /// than its convolution. The `brdf` model's lookups blend two layers in variance and
+        /// count that as the sharp layer 0's (frame.glsl `layer_pair_of_run`, brdf_quadrature.rs
+        /// `layered_radiance`). The reciprocal of that share, 1/4.
+        TEXEL_READ_VARIANCE_RECIPROCAL: u32 = 4;
         /// Newton steps of the visible-normal sampler's slope inversion (visible_normals.glsl,
         /// oracle/visible_normals.rs): from its fitted first guess the CDF's residual is 1.8e-7
         /// after 4 (measured there); 10 leaves room for the steps that bisect.
