@@ -85,15 +85,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         if images {
             let stats = |name: &str, pairs: &[(DVec3, DVec3)]| {
-                let got = evaluate(pairs, &pair);
-                let mut rel: Vec<f64> = got.iter().map(|(g, w)| (g - w).abs() / w).collect();
-                rel.sort_by(f64::total_cmp);
-                println!(
-                    "m {m}: {name}: mean {:.2} %, p99 {:.1} %, relative RMSE {:.2} %",
-                    100.0 * rel.iter().sum::<f64>() / rel.len() as f64,
-                    100.0 * rel[rel.len() * 99 / 100],
-                    100.0 * relative_rmse(&got)
-                );
+                println!("m {m}: {name}: {}", summary(&evaluate(pairs, &pair)));
             };
             stats("sphere 128²", &sphere_pixels(128));
             for angle in [10.0, 45.0, 80.0] {
@@ -105,14 +97,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             continue;
         }
         let points = evaluate(&issue_points(), &pair);
-        let mut rel: Vec<f64> = points.iter().map(|(g, w)| (g - w).abs() / w).collect();
-        rel.sort_by(f64::total_cmp);
-        println!(
-            "m {m}: 112 points mean {:.2} %, p99 {:.1} %, relative RMSE {:.2} %",
-            100.0 * rel.iter().sum::<f64>() / rel.len() as f64,
-            100.0 * rel[rel.len() * 99 / 100],
-            100.0 * relative_rmse(&points)
-        );
+        println!("m {m}: 112 points {}", summary(&points));
         let sphere = sphere_pixels(40);
         let got = evaluate(&sphere, &pair);
         let inner: Vec<(f64, f64)> = sphere
@@ -157,6 +142,19 @@ fn evaluate(
             })
             .collect()
     })
+}
+
+/// "mean M %, p99 P %, relative RMSE R %" of (got, want) pairs: the relative difference's mean and
+/// 99th percentile, and the relative RMSE.
+fn summary(values: &[(f64, f64)]) -> String {
+    let mut rel: Vec<f64> = values.iter().map(|(g, w)| (g - w).abs() / w).collect();
+    rel.sort_by(f64::total_cmp);
+    format!(
+        "mean {:.2} %, p99 {:.1} %, relative RMSE {:.2} %",
+        100.0 * rel.iter().sum::<f64>() / rel.len() as f64,
+        100.0 * rel[rel.len() * 99 / 100],
+        100.0 * relative_rmse(values)
+    )
 }
 
 fn relative_rmse(values: &[(f64, f64)]) -> f64 {
