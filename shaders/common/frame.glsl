@@ -75,8 +75,7 @@ void layer_pair_of_run(float beta, out int k0, out float t) {
     vec4 run = frame.layer_run;
     float beta1 = layer_beta(1);
     float beta2 = beta * beta;
-    float h0 = 1.57079633 / float(frame.layer_face_size[0][0]);
-    float e0 = h0 * h0 / float(TEXEL_READ_VARIANCE_RECIPROCAL);
+    float e0 = frame.layer_variance.x;
     if (run.w == 0.0) {
         layer_pair(beta, k0, t);
         float lo = k0 == 0 ? e0 : layer_beta(k0) * layer_beta(k0);
@@ -90,12 +89,12 @@ void layer_pair_of_run(float beta, out int k0, out float t) {
         int k = int(run.x) + int(whole);
         bool past = k >= count - 1;
         k0 = past ? count - 1 : k;
-        // On the run β_(k+1)/β_k = e^(1/run.z) and β/β_k = e^((x − whole)/run.z).
-        t = past ? 0.0 : (exp(2.0 * (x - whole) / run.z) - 1.0) / (exp(2.0 / run.z) - 1.0);
+        // On the run (β_(k+1)/β_k)² − 1 = frame.layer_variance.y and β/β_k = e^((x − whole)/run.z).
+        t = past ? 0.0 : (exp(2.0 * (x - whole) / run.z) - 1.0) / frame.layer_variance.y;
         // Below the run: between layer 1 and layer g = 2 (the fine layer), or below layer 1.
         bool below = x < 0.0;
         float under_1 = clamp((beta2 - e0) / max(beta1 * beta1 - e0, 1e-30), 0.0, 1.0);
-        float under_g = (beta2 - beta1 * beta1) / (exp(2.0 * run.y) - beta1 * beta1);
+        float under_g = (beta2 - beta1 * beta1) / (frame.layer_variance.z - beta1 * beta1);
         k0 = below ? (beta < beta1 ? 0 : 1) : k0;
         t = below ? (beta < beta1 ? under_1 : under_g) : t;
     }

@@ -2,7 +2,6 @@
 //! has, at what face size it is stored, and which downsampled source it is convolved from. The GPU
 //! prefilter (`gpu.rs`) and the CPU oracle (`oracle.rs`) both run exactly this plan.
 
-use crate::gpu::shaders::interface::TEXEL_READ_VARIANCE_RECIPROCAL;
 use crate::{Error, Result};
 
 /// Layers whose weight exp(-(1-c)/β²) falls below exp(-LOBE_CUTOFF) are not summed: 12.5 is 5σ of
@@ -39,12 +38,13 @@ pub const IRRADIANCE_FACE: u32 = 32;
 const _: () = assert!(6 * IRRADIANCE_FACE * IRRADIANCE_FACE < 65535);
 
 /// The variance the texels of a layer of face size `face_size` add when it is read: h²/4 for
-/// texels h = (π/2)/`face_size` radians wide (`TEXEL_READ_VARIANCE_RECIPROCAL`, whose doc derives
-/// it). The `brdf` model's blend between the sharp layer 0 and layer 1 counts it as layer 0's
-/// (brdf_quadrature.rs `layered_radiance`).
+/// texels h = (π/2)/`face_size` radians wide, each the box average of the source mip's (h²/12)
+/// and read bilinearly (a tent, h²/6). The `brdf` model's blend between the sharp layer 0 and
+/// layer 1 counts it as layer 0's (brdf_quadrature.rs `layered_radiance`; the shaders read it
+/// from `Frame::layer_variance`).
 pub fn texel_read_variance(face_size: u32) -> f64 {
     let h = std::f64::consts::FRAC_PI_2 / f64::from(face_size.max(1));
-    h * h / f64::from(TEXEL_READ_VARIANCE_RECIPROCAL)
+    h * h / 4.0
 }
 
 /// Limits on what a user may ask for.

@@ -51,12 +51,6 @@ shader_interface! {
         /// (brdf_quadrature.rs `fibonacci_point`). fract(i·0.618…) in f32 is off by up to 3e-5
         /// of a turn at i ≈ 1000, which put the shader 2e-4 from its twin at 1,024 samples.
         FIBONACCI_STEP: u32 = 2_654_435_769;
-        /// A layer of texels h radians wide ((π/2)/face size), each the box average of the source
-        /// mip's (variance h²/12) and read bilinearly (a tent, h²/6), is blurred by h²/4 more
-        /// than its convolution. The `brdf` model's lookups blend two layers in variance and
-        /// count that as the sharp layer 0's (frame.glsl `layer_pair_of_run`, brdf_quadrature.rs
-        /// `layered_radiance`). The reciprocal of that share, 1/4.
-        TEXEL_READ_VARIANCE_RECIPROCAL: u32 = 4;
         /// Newton steps of the visible-normal sampler's slope inversion (visible_normals.glsl,
         /// oracle/visible_normals.rs): from its fitted first guess the CDF's residual is 1.8e-7
         /// after 4 (measured there); 10 leaves room for the steps that bisect.
@@ -236,6 +230,11 @@ shader_interface! {
             /// otherwise. The `brdf` model's lookups find their layers from it without a search
             /// (frame.glsl `layer_pair_of_run`).
             layer_run: vec4,
+            /// What the `brdf` model's blend in variance needs of the layers, packed once a draw
+            /// (frame.rs `set_environment_layers`): x = layer 0's variance, its texels' read
+            /// (params.rs `texel_read_variance`); y = e^(2Δ) − 1, the run's ratio of variances
+            /// between neighbours less one; z = β_g², the run's first variance; w unused.
+            layer_variance: vec4,
             /// The camera basis (world), for the background's primary rays; `camera_back` is the
             /// negated view direction.
             camera_right: vec4,

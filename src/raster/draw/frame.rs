@@ -13,7 +13,7 @@ use crate::environment::brdf_quadrature::rough_lattice_m;
 use crate::environment::bright::BrightLight;
 use crate::environment::gpu::{layer_texel_offsets, BrdfLights, GpuEnvironment};
 use crate::environment::light_bins::light_bin_texels;
-use crate::environment::params::ViewBlur;
+use crate::environment::params::{texel_read_variance, ViewBlur};
 use crate::gpu::shaders::interface::{
     Frame, ObjectMaterial, MAX_ENV_LAYERS, MAX_ENV_LIGHTS, MAX_LIGHTS, ROUGH_MAX_ENV_LIGHTS,
 };
@@ -144,10 +144,17 @@ impl Frame {
             // GpuEnvironment::layer_texels refuses more texels than an i32 indexes.
             self.layer_first_texel[k / 4][k % 4] = first as i32;
         }
-        self.layer_run = match geometric_run(&betas[..betas.len().min(MAX_ENV_LAYERS)]) {
+        let run = geometric_run(&betas[..betas.len().min(MAX_ENV_LAYERS)]);
+        self.layer_run = match run {
             Some((g, log_beta, step)) => [g as f32, log_beta as f32, (1.0 / step) as f32, 1.0],
             None => [0.0; 4],
         };
+        let (ratio, first) = match run {
+            Some((_, log_beta, step)) => ((2.0 * step).exp() - 1.0, (2.0 * log_beta).exp()),
+            None => (0.0, 0.0),
+        };
+        let read = faces.first().map_or(0.0, |&face| texel_read_variance(face));
+        self.layer_variance = [read as f32, ratio as f32, first as f32, 0.0];
     }
 
     /// Packs the `brdf` model's quadrature constants (the lattice's and the grid's and their
@@ -538,5 +545,23 @@ mod tests {
         assert!((step - (brdf[3] / brdf[2]).ln()).abs() < 1e-6);
         assert_eq!(run(&[0.0, 0.1, 0.2, 0.5, 0.6]), None);
         assert_eq!(run(&[0.0, 0.1]), None);
+    }
+
+    /// The blend in variance's constants, packed once a draw: layer 0's read variance, the run's
+    /// ratio of neighbouring variances less one and its first variance (f32: 1e-6 relative).
+    #[test]
+    fn layer_variance_of_the_brdf_layers() {
+        use crate::environment::{EnvironmentModel, PrefilterParams};
+        let p = PrefilterParams::for_model(1024, EnvironmentModel::Brdf);
+        let plan = p.plan();
+        let betas: Vec<f64> = plan.iter().map(|l| l.beta).collect();
+        let faces: Vec<u32> = plan.iter().map(|l| l.face_size).collect();
+        let mut frame = Frame::zeroed();
+        frame.set_environment_layers(&betas, &faces);
+        let [read, ratio, first, _] = frame.layer_variance.map(f64::from);
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * b.abs();
+        assert!(close(read, texel_read_variance(faces[0])), "{read}");
+        assert!(close(ratio, (betas[3] / betas[2]).powi(2) - 1.0), "{ratio}");
+        assert!(close(first, betas[2] * betas[2]), "{first}");
     }
 }
