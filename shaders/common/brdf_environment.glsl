@@ -12,9 +12,11 @@
 // weighs F(acos V·H)·G·(V·H)/(nv·nh) and reads the layers at the β whose lobe covers its share
 // 1/(samples·pdf(s)) of the sphere (filtered importance sampling, `specular_fis`). The
 // lookups are bilinear by hand from the layers' texels
-// (`env_layer_texels`), with one seam rule written out here and in the twin: a tap beyond its face
-// reads the texel holding the tap's direction on the face that direction selects. The sampler's
-// own cube filtering leaves the edges and corners to the implementation.
+// (`env_layer_texels`), with one seam rule, the twin's: a tap beyond its face reads the texel
+// holding the tap's direction on the face that direction selects. Each face is stored with a
+// one-texel apron that holds those texels (layer_apron.comp), so a lookup reads four texels
+// without a branch. The sampler's own cube filtering leaves the edges and corners to the
+// implementation.
 //
 // The layers it reads are the residual of the map's bright split (environment/bright.rs); the
 // bright parts come back as the frame's `env_light_*` lights, each through the lobe widened by its
@@ -30,6 +32,7 @@
 #ifndef BRDF_ENVIRONMENT_GLSL
 #define BRDF_ENVIRONMENT_GLSL
 
+#include "cubemap.glsl"
 #include "texel_buffer.glsl"
 layout(set = 0, binding = ENV_LAYER_TEXELS_BINDING) uniform textureBuffer env_layer_texels;
 
@@ -37,37 +40,6 @@ layout(set = 0, binding = ENV_LAYER_TEXELS_BINDING) uniform textureBuffer env_la
 // (brdf_quadrature.rs `BRDF_SAMPLES`, `BRDF_HIT_SAMPLES`).
 layout(constant_id = ENV_SAMPLES_ID) const int ENV_SAMPLES = 1024;
 layout(constant_id = ENV_HIT_SAMPLES_ID) const int ENV_HIT_SAMPLES = 32;
-
-// (face, sc, tc) of a direction by the Vulkan face-selection table (src/environment/cube.rs
-// `direction_to_face`; ties go to X, then Y, then Z), and the face's frame: its direction at
-// (sc, tc) is axis + s_dir·sc + t_dir·tc (cubemap.glsl's `face_direction`, without a switch).
-void select_face(vec3 d, out int face, out vec2 st, out vec3 axis, out vec3 s_dir, out vec3 t_dir) {
-    vec3 a = abs(d);
-    float major;
-    if (a.x >= a.y && a.x >= a.z) {
-        bool pos = d.x >= 0.0;
-        face = pos ? 0 : 1;
-        major = a.x;
-        axis = vec3(pos ? 1.0 : -1.0, 0.0, 0.0);
-        s_dir = vec3(0.0, 0.0, pos ? -1.0 : 1.0);
-        t_dir = vec3(0.0, -1.0, 0.0);
-    } else if (a.y >= a.z) {
-        bool pos = d.y >= 0.0;
-        face = pos ? 2 : 3;
-        major = a.y;
-        axis = vec3(0.0, pos ? 1.0 : -1.0, 0.0);
-        s_dir = vec3(1.0, 0.0, 0.0);
-        t_dir = vec3(0.0, 0.0, pos ? 1.0 : -1.0);
-    } else {
-        bool pos = d.z >= 0.0;
-        face = pos ? 4 : 5;
-        major = a.z;
-        axis = vec3(0.0, 0.0, pos ? 1.0 : -1.0);
-        s_dir = vec3(pos ? 1.0 : -1.0, 0.0, 0.0);
-        t_dir = vec3(0.0, -1.0, 0.0);
-    }
-    st = vec2(dot(d, s_dir), dot(d, t_dir)) / major;
-}
 
 // A lookup's two layers as `layer_pair_of_run` found them for its β, with where each one's
 // texels are: its face size and its first texel (from `base`: 0 for the residual's layers,
@@ -92,45 +64,23 @@ LayerPair layer_pair_texels(float beta, int base) {
         base + frame.layer_first_texel[k1 / 4][k1 % 4], t);
 }
 
-// The texel holding direction d of the layer of face size `size` whose texels start at `first`.
-vec3 layer_texel(int size, int first, vec3 d) {
-    int face;
-    vec2 st;
-    vec3 axis, s_dir, t_dir;
-    select_face(d, face, st, axis, s_dir, t_dir);
-    ivec2 ij = clamp(ivec2(floor((st + 1.0) * 0.5 * float(size))), ivec2(0), ivec2(size - 1));
-    return texelFetch(env_layer_texels, first + (face * size + ij.y) * size + ij.x).rgb;
-}
-
-// That layer at the direction d that select_face put at (face, st), bilinear over the four texel
-// centres around it; each tap is looked up by its direction (for a tap inside the face that is
-// the texel itself).
-vec3 layer_bilinear(int isize, int first, int face, vec2 st, vec3 axis, vec3 s_dir,
-    vec3 t_dir) {
+// That layer at the direction that select_face put at (face, st), bilinear over the four texel
+// centres around it. Each face is stored with a one-texel apron (layer_apron.comp): a tap beyond
+// the face reads the apron texel, which holds the texel of the tap's direction on the face that
+// direction selects, so every lookup reads four texels of one face's rows, without a branch.
+vec3 layer_bilinear(int isize, int first, int face, vec2 st) {
     float size = float(isize);
     vec2 xy = (st + 1.0) * 0.5 * size - 0.5;
     vec2 xy0 = floor(xy);
     vec2 f = xy - xy0;
-    ivec2 ij = ivec2(xy0);
-    if (all(greaterThanEqual(ij, ivec2(0))) && all(lessThan(ij + 1, ivec2(isize)))) {
-        // All four taps inside the face: each is the texel itself, read without a face selection
-        // per tap (the same texels the rule below finds).
-        int row = first + (face * isize + ij.y) * isize + ij.x;
-        vec3 a = texelFetch(env_layer_texels, row).rgb;
-        vec3 b = texelFetch(env_layer_texels, row + 1).rgb;
-        vec3 c = texelFetch(env_layer_texels, row + isize).rgb;
-        vec3 e = texelFetch(env_layer_texels, row + isize + 1).rgb;
-        vec3 top = a + (b - a) * f.x;
-        vec3 bottom = c + (e - c) * f.x;
-        return top + (bottom - top) * f.y;
-    }
-    // Face coordinates of the tap centres x0, x0 + 1 (and y0, y0 + 1).
-    vec2 c0 = 2.0 * (xy0 + 0.5) / size - 1.0;
-    vec2 c1 = 2.0 * (xy0 + 1.5) / size - 1.0;
-    vec3 a = layer_texel(isize, first, axis + s_dir * c0.x + t_dir * c0.y);
-    vec3 b = layer_texel(isize, first, axis + s_dir * c1.x + t_dir * c0.y);
-    vec3 c = layer_texel(isize, first, axis + s_dir * c0.x + t_dir * c1.y);
-    vec3 e = layer_texel(isize, first, axis + s_dir * c1.x + t_dir * c1.y);
+    // Taps x0 and x0 + 1 in [−1, M]: apron columns and rows 0 and M + 1.
+    ivec2 ij = ivec2(xy0) + 1;
+    int stride = isize + 2;
+    int row = first + (face * stride + ij.y) * stride + ij.x;
+    vec3 a = texelFetch(env_layer_texels, row).rgb;
+    vec3 b = texelFetch(env_layer_texels, row + 1).rgb;
+    vec3 c = texelFetch(env_layer_texels, row + stride).rgb;
+    vec3 e = texelFetch(env_layer_texels, row + stride + 1).rgb;
     vec3 top = a + (b - a) * f.x;
     vec3 bottom = c + (e - c) * f.x;
     return top + (bottom - top) * f.y;
@@ -142,13 +92,12 @@ vec3 layered_radiance_pair(vec3 d, LayerPair pair) {
     // Both layers see d on the same face at the same (s, t).
     int face;
     vec2 st;
-    vec3 axis, s_dir, t_dir;
-    select_face(d, face, st, axis, s_dir, t_dir);
-    vec3 lo = layer_bilinear(pair.size0, pair.first0, face, st, axis, s_dir, t_dir);
+    select_face(d, face, st);
+    vec3 lo = layer_bilinear(pair.size0, pair.first0, face, st);
     if (pair.t == 0.0) {
         return lo;
     }
-    vec3 hi = layer_bilinear(pair.size1, pair.first1, face, st, axis, s_dir, t_dir);
+    vec3 hi = layer_bilinear(pair.size1, pair.first1, face, st);
     return lo + (hi - lo) * pair.t;
 }
 
@@ -250,8 +199,7 @@ vec3 rough_bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
 int light_bin(vec3 d) {
     int face;
     vec2 st;
-    vec3 axis, s_dir, t_dir;
-    select_face(d, face, st, axis, s_dir, t_dir);
+    select_face(d, face, st);
     ivec2 cell = clamp(ivec2(floor((st + 1.0) * (0.5 * float(ENV_LIGHT_BIN_CELLS)))), ivec2(0),
         ivec2(ENV_LIGHT_BIN_CELLS - 1));
     return (face * ENV_LIGHT_BIN_CELLS + cell.y) * ENV_LIGHT_BIN_CELLS + cell.x;

@@ -29,6 +29,36 @@ void face_frame(int face, out vec3 axis, out vec3 s_dir, out vec3 t_dir) {
     }
 }
 
+// (face, sc, tc) of a direction by the Vulkan face-selection table (src/environment/cube.rs
+// `direction_to_face`; ties go to X, then Y, then Z), with sc and tc the direction's components
+// along the face's frame (`face_frame`) over its major one.
+void select_face(vec3 d, out int face, out vec2 st) {
+    vec3 a = abs(d);
+    float major;
+    vec3 s_dir;
+    vec3 t_dir;
+    if (a.x >= a.y && a.x >= a.z) {
+        bool pos = d.x >= 0.0;
+        face = pos ? 0 : 1;
+        major = a.x;
+        s_dir = vec3(0.0, 0.0, pos ? -1.0 : 1.0);
+        t_dir = vec3(0.0, -1.0, 0.0);
+    } else if (a.y >= a.z) {
+        bool pos = d.y >= 0.0;
+        face = pos ? 2 : 3;
+        major = a.y;
+        s_dir = vec3(1.0, 0.0, 0.0);
+        t_dir = vec3(0.0, 0.0, pos ? 1.0 : -1.0);
+    } else {
+        bool pos = d.z >= 0.0;
+        face = pos ? 4 : 5;
+        major = a.z;
+        s_dir = vec3(pos ? 1.0 : -1.0, 0.0, 0.0);
+        t_dir = vec3(0.0, -1.0, 0.0);
+    }
+    st = vec2(dot(d, s_dir), dot(d, t_dir)) / major;
+}
+
 float texel_coord(uint i, uint face_size) {
     return 2.0 * (float(i) + 0.5) / float(face_size) - 1.0;
 }

@@ -7,7 +7,7 @@
 //! (filtered importance sampling, Křivánek & Colbert, GPU Gems 3 ch. 20), which is what keeps a
 //! sharp layer from aliasing. The lookups are bilinear over texel centres with one seam rule: a
 //! tap beyond its face reads the texel holding the tap's direction on the face that direction
-//! selects. `brdf_definition.rs` is the brute-force ground truth it converges to.
+//! selects (the shaders read it from each face's apron, [`apron_texels`]). `brdf_definition.rs` is the brute-force ground truth it converges to.
 
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -672,13 +672,40 @@ pub fn layered_radiance(env: &PrefilteredEnvironment, d: DVec3, beta: f64) -> [f
 
 /// The texel of `cube` holding direction `d`.
 fn cube_texel(cube: &CubeImage, d: DVec3) -> [f64; 3] {
+    let texel = cube_texel_rgba(cube, d);
+    [texel[0], texel[1], texel[2]].map(f64::from)
+}
+
+/// [`cube_texel`] as stored.
+fn cube_texel_rgba(cube: &CubeImage, d: DVec3) -> [f32; 4] {
     let size = cube.face_size;
     let (face, sc, tc) = direction_to_face(d);
     let index = |c: f64| {
         (((c + 1.0) * 0.5 * f64::from(size)).floor() as i64).clamp(0, i64::from(size) - 1) as u32
     };
-    let texel = cube.get(face, index(sc), index(tc));
-    [texel[0], texel[1], texel[2]].map(f64::from)
+    cube.get(face, index(sc), index(tc))
+}
+
+/// The texels of `cube` with a one-texel apron around each face, as the shaders read a layer
+/// (layer_apron.comp, its GPU twin): face after face, row after row, (M + 2)² texels a face, texel
+/// (i, j) for i, j ∈ [−1, M] the texel of the direction through (i, j)'s centre on the face that
+/// direction selects, which is the tap [`cube_bilinear`] reads there.
+pub fn apron_texels(cube: &CubeImage) -> Vec<[f32; 4]> {
+    let size = cube.face_size;
+    let coord = |k: i64| 2.0 * (k as f64 + 0.5) / f64::from(size) - 1.0;
+    let last = i64::from(size);
+    let mut texels = Vec::with_capacity(6 * (size as usize + 2).pow(2));
+    for face in 0..6 {
+        for j in -1..=last {
+            for i in -1..=last {
+                texels.push(cube_texel_rgba(
+                    cube,
+                    face_direction(face, coord(i), coord(j)),
+                ));
+            }
+        }
+    }
+    texels
 }
 
 /// Bilinear filtering of a cube at `d` over the four texel centres around it; each tap is looked
@@ -756,6 +783,77 @@ mod tests {
         // rad). A tap from the wrong texel at an edge costs up to a texel's step of the field,
         // ≈ √6·0.05 ≈ 0.12, so 0.03 would catch it.
         assert!(worst < 0.03, "{worst}");
+    }
+
+    /// The shaders' bilinear read of a layer with aprons (brdf_environment.glsl
+    /// `layer_bilinear`): four texels of the face's padded rows, in f64 as `cube_bilinear`.
+    fn apron_bilinear(texels: &[[f32; 4]], size: u32, d: DVec3) -> [f64; 3] {
+        let (face, sc, tc) = direction_to_face(d);
+        let m = f64::from(size);
+        let (x, y) = ((sc + 1.0) * 0.5 * m - 0.5, (tc + 1.0) * 0.5 * m - 0.5);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let stride = size as usize + 2;
+        let row = (face * stride + (y0 as i64 + 1) as usize) * stride + (x0 as i64 + 1) as usize;
+        let tap = |k: usize| texels[k].map(f64::from);
+        let (a, b, c, e) = (
+            tap(row),
+            tap(row + 1),
+            tap(row + stride),
+            tap(row + stride + 1),
+        );
+        std::array::from_fn(|k| {
+            let top = a[k] + (b[k] - a[k]) * fx;
+            let bottom = c[k] + (e[k] - c[k]) * fx;
+            top + (bottom - top) * fy
+        })
+    }
+
+    #[test]
+    fn the_aprons_give_every_tap_the_seam_rule_gives() {
+        // Every texel a different value, so a tap from any other texel shows.
+        for size in [1, 2, 5, 8] {
+            let mut cube = CubeImage::new(size);
+            for (k, texel) in cube.texels.iter_mut().enumerate() {
+                *texel = [k as f32, 0.5 * k as f32 + 1.0, (k * k) as f32, 1.0];
+            }
+            let texels = apron_texels(&cube);
+            let stride = size as usize + 2;
+            assert_eq!(texels.len(), 6 * stride * stride);
+            // Inside each face, the face itself.
+            for face in 0..6 {
+                for j in 0..size {
+                    for i in 0..size {
+                        let padded = (face * stride + j as usize + 1) * stride + i as usize + 1;
+                        assert_eq!(texels[padded], cube.get(face, i, j));
+                    }
+                }
+            }
+            // Directions near every edge and corner of every face, and a spread of others.
+            let mut directions = Vec::new();
+            let m = f64::from(size);
+            for face in 0..6 {
+                for &sc in &[-1.0, -1.0 + 0.3 / m, -0.2, 0.0, 0.45, 1.0 - 0.3 / m, 1.0] {
+                    for &tc in &[-1.0, -1.0 + 0.2 / m, 0.1, 1.0 - 0.4 / m, 1.0] {
+                        directions.push(face_direction(face, sc, tc).normalize());
+                    }
+                }
+            }
+            for k in 0..3000 {
+                let t = k as f64 * 0.618_033_988_75;
+                directions.push(
+                    DVec3::new((t * 7.1).sin(), (t * 3.3).cos(), (t * 5.7).sin()).normalize(),
+                );
+            }
+            for d in directions {
+                // The same taps and the same arithmetic: exactly equal.
+                assert_eq!(
+                    apron_bilinear(&texels, size, d),
+                    cube_bilinear(&cube, d),
+                    "{d}"
+                );
+            }
+        }
     }
 
     fn smooth() -> (BrdfParams, FresnelTable) {

@@ -18,12 +18,13 @@ use super::params::{
     LOBE_CUTOFF, MAX_FACE_SIZE, MIN_LAYER_FACE,
 };
 use crate::gpu::shaders::interface::{
-    BlurLayerParams, DownsampleParams, EquirectToCubeParams, IrradianceParams, NearHeader,
-    NEAR_TEXELS_BINDING, PREFILTER_DEST_BINDING, PREFILTER_SOURCE_BINDING, PREFILTER_WORKGROUP,
+    BlurLayerParams, DownsampleParams, EquirectToCubeParams, IrradianceParams, LayerApronParams,
+    NearHeader, NEAR_TEXELS_BINDING, PREFILTER_DEST_BINDING, PREFILTER_SOURCE_BINDING,
+    PREFILTER_WORKGROUP,
 };
 use crate::gpu::{
     Access, AdapterInfo, Binding, BindingKind, Buffer, BufferDesc, BufferUsage, ComputePipeline,
-    DescriptorSet, GpuContext, Image, ImageUsage, ImageUse, Layout, Recorder,
+    DescriptorSet, GpuContext, Image, ImageUsage, ImageUse, Layout, Recorder, Resource,
 };
 use crate::{Error, Result};
 use std::mem::{offset_of, size_of};
@@ -162,8 +163,15 @@ pub struct BrdfLights<'a> {
 }
 
 /// The index of each layer's first texel when the layers of `faces` are stored one after the
-/// other, 6·M² texels each (what `ENV_LAYER_TEXELS_BINDING` holds), and the total.
+/// other with a one-texel apron around each face (layer_apron.comp), 6·(M + 2)² texels each (what
+/// `ENV_LAYER_TEXELS_BINDING` holds), and the total.
 pub fn layer_texel_offsets(faces: impl IntoIterator<Item = u32>) -> (Vec<u64>, u64) {
+    texel_offsets(faces.into_iter().map(|face| face + 2))
+}
+
+/// The first texel of each cube of `faces` stored one after the other, 6·M² texels each, and the
+/// total.
+fn texel_offsets(faces: impl IntoIterator<Item = u32>) -> (Vec<u64>, u64) {
     let mut next = 0;
     let offsets = faces
         .into_iter()
@@ -277,11 +285,15 @@ fn kept_texels<'a>(
 }
 
 /// The layers of `envs`, one environment after the other, in one device-local texel buffer
-/// (layer k of the first from `layer_texel_offsets(layer_faces())[k]`), copied from the images.
-/// Refused when the device's texel buffers cannot hold them all.
+/// (layer k of the first from `layer_texel_offsets(layer_faces())[k]`): copied from the images
+/// into a buffer face after face, then written with their aprons by layer_apron.comp (twin:
+/// `brdf_quadrature::apron_texels`). The pipeline is made here: once per environment, whose
+/// texels are kept. Refused when the device's texel buffers cannot hold them all.
 fn concatenated_texels(gpu: &GpuContext, envs: &[&GpuEnvironment]) -> Result<Buffer> {
     let layers: Vec<&Image> = envs.iter().flat_map(|env| env.layers.iter()).collect();
-    let (offsets, total) = layer_texel_offsets(layers.iter().map(|image| image.desc().width));
+    let faces: Vec<u32> = layers.iter().map(|image| image.desc().width).collect();
+    let (offsets, total) = layer_texel_offsets(faces.iter().copied());
+    let (sources, source_total) = texel_offsets(faces.iter().copied());
     let limit = u64::from(gpu.info().max_texel_buffer_elements).min(i32::MAX as u64);
     if total > limit {
         return Err(Error::invalid(
@@ -294,24 +306,57 @@ fn concatenated_texels(gpu: &GpuContext, envs: &[&GpuEnvironment]) -> Result<Buf
             ),
         ));
     }
+    let faces_copied = gpu.create_buffer(BufferDesc::device_local(
+        "environment layer texels without aprons",
+        source_total * 16,
+        BufferUsage::UNIFORM_TEXEL | BufferUsage::TRANSFER_DST,
+    ))?;
     let buffer = gpu.create_buffer(BufferDesc::device_local(
         "environment layer texels",
         total * 16,
-        BufferUsage::UNIFORM_TEXEL | BufferUsage::TRANSFER_DST,
+        BufferUsage::UNIFORM_TEXEL | BufferUsage::STORAGE | BufferUsage::TRANSFER_SRC,
     ))?;
+    let apron = gpu.create_compute_pipeline(
+        "layer_apron.comp",
+        crate::gpu::shaders::LAYER_APRON_COMP,
+        &TEXEL_IO_BINDINGS,
+        push_size::<LayerApronParams>(),
+    )?;
+    let set = gpu.create_descriptor_set(
+        apron.layout(),
+        &[
+            (
+                PREFILTER_SOURCE_BINDING,
+                Resource::TexelBuffer(&faces_copied),
+            ),
+            (PREFILTER_DEST_BINDING, Resource::Buffer(&buffer)),
+        ],
+    )?;
     let sampled = ImageUse::new(Access::GraphicsShaderRead, Layout::ShaderRead);
     let transfer_src = ImageUse::new(Access::TransferRead, Layout::TransferSrc);
     gpu.submit_and_wait(|rec| {
-        for (image, &first) in layers.iter().zip(&offsets) {
+        for (image, &first) in layers.iter().zip(&sources) {
             // Draws may have sampled the image; it goes back to being sampled after.
             rec.image_barrier(image, sampled, transfer_src);
-            rec.copy_image_rows_to_buffer(image, image.desc().height, &buffer, first * 16);
+            rec.copy_image_rows_to_buffer(image, image.desc().height, &faces_copied, first * 16);
             rec.image_barrier(image, transfer_src, sampled);
         }
-        // The draws (and the compute evaluator) that read the buffer are later submits; the
-        // barriers make the copy's writes visible to their shaders.
-        rec.memory_barrier(Access::TransferWrite, Access::GraphicsShaderRead);
         rec.memory_barrier(Access::TransferWrite, Access::ComputeShaderRead);
+        rec.bind_compute(&apron, &set);
+        for ((&face_size, &source), &dest) in faces.iter().zip(&sources).zip(&offsets) {
+            // Both below `total`, which the limit keeps within an i32.
+            let constants = LayerApronParams {
+                face_size,
+                source_first: source as u32,
+                dest_first: dest as u32,
+            };
+            rec.push_constants(&apron, bytemuck::bytes_of(&constants));
+            rec.dispatch(groups(face_size + 2), groups(face_size + 2), 6);
+        }
+        // The draws (and the compute evaluator) that read the buffer are later submits; the
+        // barriers make the pass's writes visible to their shaders.
+        rec.memory_barrier(Access::ComputeShaderWrite, Access::GraphicsShaderRead);
+        rec.memory_barrier(Access::ComputeShaderWrite, Access::ComputeShaderRead);
         Ok(())
     })?;
     Ok(buffer)
@@ -621,6 +666,22 @@ fn check_source(source: &Equirect, intensity: f64, rotation_deg: f64) -> Result<
 }
 
 impl GpuEnvironment {
+    /// Copies [`layer_texels`](Self::layer_texels) back to the host (tests): the layers with
+    /// their aprons, from `layer_texel_offsets(layer_faces())`.
+    pub fn read_layer_texels(&self, gpu: &GpuContext) -> Result<Vec<[f32; 4]>> {
+        let texels = self.layer_texels(gpu)?;
+        let readback =
+            gpu.create_buffer(BufferDesc::readback("layer texel readback", texels.size()))?;
+        gpu.submit_and_wait(|rec| {
+            // layer_texels' submit made its writes visible to later transfers' reads too.
+            rec.memory_barrier(Access::ComputeShaderWrite, Access::TransferRead);
+            rec.copy_buffer(texels, &readback);
+            rec.memory_barrier(Access::TransferWrite, Access::HostRead);
+            Ok(())
+        })?;
+        Ok(readback.read()?)
+    }
+
     /// Copies every layer and the irradiance back to the host (tests, `shikki prefilter`).
     pub fn read_back(&self, gpu: &GpuContext) -> Result<PrefilteredEnvironment> {
         let readback = |image: &Image| -> Result<Buffer> {

@@ -10,11 +10,14 @@ use common::{
 };
 use glam::DVec3;
 use rayon::prelude::*;
+use shikki::environment::brdf_quadrature::apron_texels;
 use shikki::environment::cube::{
     direction_to_equirect, face_direction, texel_direction, world_to_environment,
 };
 use shikki::environment::definition::{irradiance_definition, prefiltered_radiance_definition};
-use shikki::environment::gpu::{default_params, largest_face_size, GpuEnvironment, GpuPrefilter};
+use shikki::environment::gpu::{
+    default_params, largest_face_size, layer_texel_offsets, GpuEnvironment, GpuPrefilter,
+};
 use shikki::environment::params::ViewBlur;
 use shikki::environment::{oracle, CubeImage, Equirect, PrefilterParams};
 use shikki::model::brdf::view_dependent_diffuse;
@@ -530,6 +533,32 @@ fn an_uploaded_environment_reads_back_identical_texels_and_renders_the_same() {
         .unwrap()
         .to_string();
     assert!(message.contains("layers[1] texel 3"), "{message}");
+    assert_no_validation_messages(&gpu);
+}
+
+#[test]
+fn the_brdf_models_layer_texels_carry_the_seam_rule_in_their_aprons() {
+    // The `brdf` model reads each face with a one-texel apron (layer_apron.comp); every texel of
+    // it, apron and face, must be the CPU twin's, bit for bit: a copy, not a computation.
+    let gpu = validated_gpu();
+    let env = GpuPrefilter::new(&gpu)
+        .unwrap()
+        .run(
+            &gpu,
+            &hashed_equirect(128, 64),
+            &small_params(32),
+            EnvironmentLight::new(1.0, 10.0),
+        )
+        .unwrap();
+    let host = env.read_back(&gpu).unwrap();
+    let want: Vec<[f32; 4]> = host.layers.iter().flat_map(apron_texels).collect();
+    let (offsets, total) = layer_texel_offsets(env.layer_faces());
+    assert_eq!(total as usize, want.len());
+    assert_eq!(offsets.len(), host.layers.len());
+    let got = env.read_layer_texels(&gpu).unwrap();
+    assert_eq!(got.len(), want.len());
+    let wrong = got.iter().zip(&want).filter(|(g, w)| g != w).count();
+    assert_eq!(wrong, 0, "{wrong} of {} texels differ", want.len());
     assert_no_validation_messages(&gpu);
 }
 

@@ -318,6 +318,14 @@ shader_interface! {
             unused: uint,
         }
 
+        /// The apron pass's push constants (layer_apron.comp): one layer of face size M, read
+        /// from the unpadded texels at `source_first`, written with its apron at `dest_first`.
+        struct LayerApronParams: push_constant {
+            face_size: uint,
+            source_first: uint,
+            dest_first: uint,
+        }
+
         /// Step 2's push constants (downsample.comp).
         struct DownsampleParams: push_constant {
             /// The face size written (half the one read).

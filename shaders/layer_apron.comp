@@ -1,0 +1,41 @@
+#version 450
+// One layer of the `brdf` model's layer texels (environment/gpu.rs `concatenated_texels`) with a
+// one-texel apron around each face: texel (i, j), i, j ∈ [−1, M], of face f holds the texel of the
+// direction through (i, j)'s centre on the face that direction selects. Inside the face that is
+// texel (i, j) itself; in the apron, the seam rule of the lookups' bilinear taps
+// (brdf_environment.glsl `layer_bilinear`), which then never leave a face's rows. CPU twin:
+// environment::brdf_quadrature::apron_texels.
+
+#include "interface.glsl"
+
+layout(local_size_x = PREFILTER_WORKGROUP, local_size_y = PREFILTER_WORKGROUP, local_size_z = 1) in;
+
+#include "cubemap.glsl"
+
+layout(push_constant) uniform PushConstants {
+    LayerApronParams params;
+};
+
+// RGBA32F texels.
+#include "texel_buffer.glsl"
+layout(set = 0, binding = PREFILTER_SOURCE_BINDING) uniform textureBuffer src;
+layout(std430, set = 0, binding = PREFILTER_DEST_BINDING) writeonly buffer Dest { vec4 dst[]; };
+
+void main() {
+    uvec3 id = gl_GlobalInvocationID;
+    int m = int(params.face_size);
+    int padded = m + 2;
+    if (id.x >= uint(padded) || id.y >= uint(padded)) {
+        return;
+    }
+    int face = int(id.z);
+    // The tap's face coordinates as the lookup computes them, 2·(x0 + ½)/M − 1 for x0 = i.
+    vec2 c = 2.0 * (vec2(ivec2(id.xy) - 1) + 0.5) / float(m) - 1.0;
+    int held;
+    vec2 st;
+    select_face(face_direction(face, c.x, c.y), held, st);
+    ivec2 ij = clamp(ivec2(floor((st + 1.0) * 0.5 * float(m))), ivec2(0), ivec2(m - 1));
+    int texel = int(params.source_first) + (held * m + ij.y) * m + ij.x;
+    dst[params.dest_first + (uint(face) * uint(padded) + id.y) * uint(padded) + id.x] =
+        texelFetch(src, texel);
+}
