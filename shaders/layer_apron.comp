@@ -19,7 +19,9 @@ layout(push_constant) uniform PushConstants {
 // RGBA32F texels.
 #include "texel_buffer.glsl"
 layout(set = 0, binding = PREFILTER_SOURCE_BINDING) uniform textureBuffer src;
-layout(std430, set = 0, binding = PREFILTER_DEST_BINDING) writeonly buffer Dest { vec4 dst[]; };
+// A storage texel buffer, not a storage buffer: a large map's layers exceed
+// maxStorageBufferRange (environment/gpu.rs APRON_BINDINGS).
+layout(set = 0, binding = PREFILTER_DEST_BINDING, rgba32f) uniform writeonly imageBuffer dst;
 
 void main() {
     uvec3 id = gl_GlobalInvocationID;
@@ -36,6 +38,6 @@ void main() {
     select_face(face_direction(face, c.x, c.y), held, st);
     ivec2 ij = clamp(ivec2(floor((st + 1.0) * 0.5 * float(m))), ivec2(0), ivec2(m - 1));
     int texel = int(params.source_first) + (held * m + ij.y) * m + ij.x;
-    dst[params.dest_first + (uint(face) * uint(padded) + id.y) * uint(padded) + id.x] =
-        texelFetch(src, texel);
+    int index = int(params.dest_first) + (face * padded + int(id.y)) * padded + int(id.x);
+    imageStore(dst, index, texelFetch(src, texel));
 }

@@ -40,6 +40,14 @@ const TEXEL_IO_BINDINGS: [Binding; 2] = [
     Binding::new(PREFILTER_DEST_BINDING, BindingKind::StorageBuffer),
 ];
 
+/// The apron pass (layer_apron.comp): the layers as copied, and the layers with aprons, written
+/// through a storage texel buffer: the texels of a large map's layers exceed what a storage
+/// buffer may bind (maxStorageBufferRange, 128 MiB on lavapipe), not what a texel buffer holds.
+const APRON_BINDINGS: [Binding; 2] = [
+    Binding::new(PREFILTER_SOURCE_BINDING, BindingKind::UniformTexelBuffer),
+    Binding::new(PREFILTER_DEST_BINDING, BindingKind::StorageTexelBuffer),
+];
+
 /// Step 1: the equirect (texel buffer), the cube, and the list of texels the near pass finishes
 /// (see `equirect_to_cube_body.glsl`).
 const TO_CUBE_BINDINGS: [Binding; 3] = [
@@ -314,12 +322,12 @@ fn concatenated_texels(gpu: &GpuContext, envs: &[&GpuEnvironment]) -> Result<Buf
     let buffer = gpu.create_buffer(BufferDesc::device_local(
         "environment layer texels",
         total * 16,
-        BufferUsage::UNIFORM_TEXEL | BufferUsage::STORAGE | BufferUsage::TRANSFER_SRC,
+        BufferUsage::UNIFORM_TEXEL | BufferUsage::STORAGE_TEXEL | BufferUsage::TRANSFER_SRC,
     ))?;
     let apron = gpu.create_compute_pipeline(
         "layer_apron.comp",
         crate::gpu::shaders::LAYER_APRON_COMP,
-        &TEXEL_IO_BINDINGS,
+        &APRON_BINDINGS,
         push_size::<LayerApronParams>(),
     )?;
     let set = gpu.create_descriptor_set(
@@ -329,7 +337,7 @@ fn concatenated_texels(gpu: &GpuContext, envs: &[&GpuEnvironment]) -> Result<Buf
                 PREFILTER_SOURCE_BINDING,
                 Resource::TexelBuffer(&faces_copied),
             ),
-            (PREFILTER_DEST_BINDING, Resource::Buffer(&buffer)),
+            (PREFILTER_DEST_BINDING, Resource::TexelBuffer(&buffer)),
         ],
     )?;
     let sampled = ImageUse::new(Access::GraphicsShaderRead, Layout::ShaderRead);

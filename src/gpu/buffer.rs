@@ -20,6 +20,10 @@ impl BufferUsage {
     pub const STORAGE: Self = Self(vk::BufferUsageFlags::STORAGE_BUFFER);
     /// Read in shaders as a `textureBuffer` of RGBA32F texels (`Resource::TexelBuffer`).
     pub const UNIFORM_TEXEL: Self = Self(vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER);
+    /// Written in shaders as an `imageBuffer` of RGBA32F texels (`Resource::TexelBuffer` at a
+    /// `BindingKind::StorageTexelBuffer`): unlike a storage buffer, as large as a texel buffer
+    /// may be (maxTexelBufferElements, not maxStorageBufferRange).
+    pub const STORAGE_TEXEL: Self = Self(vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER);
     /// Holds the arguments of an indirect dispatch (`Recorder::dispatch_indirect`).
     pub const INDIRECT: Self = Self(vk::BufferUsageFlags::INDIRECT_BUFFER);
     /// Read by an acceleration-structure build (vertices, indices, instances), by address.

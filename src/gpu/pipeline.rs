@@ -21,6 +21,8 @@ pub enum BindingKind {
     StorageImage,
     /// A `textureBuffer` of RGBA32F texels, for gathered reads (quirk `ssbo_gather_is_per_lane`).
     UniformTexelBuffer,
+    /// A `layout(rgba32f) imageBuffer` written texel by texel.
+    StorageTexelBuffer,
     /// An `accelerationStructureEXT` for ray queries.
     AccelerationStructure,
 }
@@ -54,6 +56,7 @@ fn descriptor_type(kind: BindingKind) -> vk::DescriptorType {
         BindingKind::SampledImage => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
         BindingKind::StorageImage => vk::DescriptorType::STORAGE_IMAGE,
         BindingKind::UniformTexelBuffer => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+        BindingKind::StorageTexelBuffer => vk::DescriptorType::STORAGE_TEXEL_BUFFER,
         BindingKind::AccelerationStructure => vk::DescriptorType::ACCELERATION_STRUCTURE_KHR,
     }
 }
@@ -438,7 +441,8 @@ pub enum Resource<'a> {
     /// Every element of an array binding, in order; its length must equal the binding's count.
     SampledImages(Vec<&'a Image>, &'a Sampler),
     StorageImage(&'a Image),
-    /// The whole buffer as RGBA32F texels (created with `BufferUsage::UNIFORM_TEXEL`).
+    /// The whole buffer as RGBA32F texels (created with `BufferUsage::UNIFORM_TEXEL`, or
+    /// `STORAGE_TEXEL` for a `BindingKind::StorageTexelBuffer`).
     TexelBuffer(&'a Buffer),
     AccelerationStructure(&'a AccelerationStructure),
 }
