@@ -31,7 +31,7 @@ void main() {
         return;
     }
     int face = int(id.z);
-    // The tap's face coordinates as the lookup computes them, 2·(x0 + ½)/M − 1 for x0 = i.
+    // Face coordinates of texel (i, j)'s centre, 2·(i + ½)/M − 1, i = −1 and M in the apron.
     vec2 c = 2.0 * (vec2(ivec2(id.xy) - 1) + 0.5) / float(m) - 1.0;
     int held;
     vec2 st;
