@@ -132,28 +132,37 @@ impl EnvironmentDiskCache {
 }
 
 /// The file's bytes: header, then the payload (layer count, betas, each layer's face size and
-/// texels, the irradiance's face size and texels), all little-endian.
+/// texels, the irradiance's face size and texels), all little-endian. Written into one buffer of
+/// the final size, the digest filled in last: a cold render writes three of these while it holds
+/// the environments, so a payload copy or a doubling buffer would set its peak memory.
 pub fn encode(key: &CacheKey, env: &PrefilteredEnvironment) -> Vec<u8> {
-    let mut payload = Vec::new();
-    payload.extend_from_slice(&(env.layers.len() as u32).to_le_bytes());
-    for beta in &env.betas {
-        payload.extend_from_slice(&beta.to_le_bytes());
-    }
-    for cube in env.layers.iter().chain(std::iter::once(&env.irradiance)) {
-        payload.extend_from_slice(&cube.face_size.to_le_bytes());
-        for texel in &cube.texels {
-            for c in texel {
-                payload.extend_from_slice(&c.to_le_bytes());
-            }
-        }
-    }
-    let mut bytes = Vec::with_capacity(HEADER_BYTES + payload.len());
+    let cubes = || env.layers.iter().chain(std::iter::once(&env.irradiance));
+    let payload_len = 4
+        + 8 * env.betas.len()
+        + cubes()
+            .map(|cube| 4 + 16 * cube.texels.len())
+            .sum::<usize>();
+    let mut bytes = Vec::with_capacity(HEADER_BYTES + payload_len);
     bytes.extend_from_slice(MAGIC);
     bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
     bytes.extend_from_slice(&key.0);
-    bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    bytes.extend_from_slice(&Sha256::digest(&payload));
-    bytes.extend_from_slice(&payload);
+    bytes.extend_from_slice(&(payload_len as u64).to_le_bytes());
+    // The payload's SHA-256, once the payload is there.
+    bytes.extend_from_slice(&[0; 32]);
+    bytes.extend_from_slice(&(env.layers.len() as u32).to_le_bytes());
+    for beta in &env.betas {
+        bytes.extend_from_slice(&beta.to_le_bytes());
+    }
+    for cube in cubes() {
+        bytes.extend_from_slice(&cube.face_size.to_le_bytes());
+        for texel in &cube.texels {
+            for c in texel {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+    }
+    let digest = Sha256::digest(&bytes[HEADER_BYTES..]);
+    bytes[HEADER_BYTES - 32..HEADER_BYTES].copy_from_slice(&digest);
     bytes
 }
 

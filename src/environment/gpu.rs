@@ -714,7 +714,9 @@ impl GpuEnvironment {
             rec.memory_barrier(Access::TransferWrite, Access::HostRead);
             Ok(())
         })?;
-        let cube = |(image, buffer): &(&Image, Buffer)| -> Result<CubeImage> {
+        // Each readback buffer goes as soon as it is read: the host copies and the buffers
+        // together would be twice the environment (a cold render's peak memory).
+        let cube = |(image, buffer): (&Image, Buffer)| -> Result<CubeImage> {
             Ok(CubeImage {
                 face_size: image.desc().width,
                 texels: buffer.read()?,
@@ -722,8 +724,8 @@ impl GpuEnvironment {
         };
         Ok(PrefilteredEnvironment {
             betas: self.betas.clone(),
-            layers: layers.iter().map(cube).collect::<Result<_>>()?,
-            irradiance: cube(&irradiance)?,
+            layers: layers.into_iter().map(cube).collect::<Result<_>>()?,
+            irradiance: cube(irradiance)?,
         })
     }
 }
