@@ -4,7 +4,7 @@
 //! (`environment::brdf_quadrature`) number by number.
 
 use crate::environment::brdf_quadrature::{albedo_knots, BRDF_HIT_SAMPLES, BRDF_SAMPLES};
-use crate::environment::gpu::GpuEnvironment;
+use crate::environment::gpu::{GpuEnvironment, LayerApronPass};
 use crate::gpu::shaders::interface::{
     BrdfEvalParams, DrawConstants, Frame, ObjectMaterial, BACKGROUND_COLOR, BRDF_EVAL_WORKGROUP,
     ENV_EVAL_DIRECTIONS_BINDING, ENV_EVAL_PARAMS_BINDING, ENV_EVAL_VALUES_BINDING,
@@ -62,7 +62,7 @@ pub fn brdf_environment_specular_gpu(
         constants.words(),
     )?;
     // The draw's sources: an attached bright split's residuals and lights, else the map itself.
-    let sources = env.brdf_sources(gpu)?;
+    let sources = env.brdf_sources(gpu, &LayerApronPass::new(gpu)?)?;
     let mut frame = Frame::zeroed();
     frame.environment = [1, env.layers.len() as i32, 0, 0];
     frame.set_environment_layers(&env.betas, &env.layer_faces());

@@ -135,8 +135,12 @@ impl BrightEnvironment {
 
     /// The residual's and then the rough residual's layer texels in one texel buffer, made on
     /// first use and kept.
-    fn texels(&self, gpu: &GpuContext) -> Result<&Buffer> {
-        kept_texels(&self.texels, gpu, &[&self.residual, &self.rough_residual])
+    fn texels(&self, gpu: &GpuContext, apron: &LayerApronPass) -> Result<&Buffer> {
+        kept_texels(
+            &self.texels,
+            (gpu, apron),
+            &[&self.residual, &self.rough_residual],
+        )
     }
 }
 
@@ -234,11 +238,15 @@ impl GpuEnvironment {
 
     /// What the `brdf` model's lookups read and the lights it adds: the attached splits'
     /// residuals and lights, or without them this map itself for both and no lights (an
-    /// environment uploaded by hand, as tests do).
-    pub fn brdf_sources(&self, gpu: &GpuContext) -> Result<BrdfSources<'_>> {
+    /// environment uploaded by hand, as tests do). `apron` writes the texels on first use.
+    pub fn brdf_sources(
+        &self,
+        gpu: &GpuContext,
+        apron: &LayerApronPass,
+    ) -> Result<BrdfSources<'_>> {
         let texels = match self.bright.get() {
-            Some(bright) => bright.texels(gpu)?,
-            None => self.layer_texels(gpu)?,
+            Some(bright) => bright.texels(gpu, apron)?,
+            None => self.layer_texels(gpu, apron)?,
         };
         Ok(BrdfSources {
             texels,
@@ -271,33 +279,59 @@ impl GpuEnvironment {
     }
 
     /// The layers' texels concatenated in one device-local texel buffer (layer k from
-    /// `layer_texel_offsets(layer_faces())[k]`), copied from the images on first use and kept.
-    /// Refused when the device's texel buffers cannot hold them all.
-    pub fn layer_texels(&self, gpu: &GpuContext) -> Result<&Buffer> {
-        kept_texels(&self.layer_texels, gpu, &[self])
+    /// `layer_texel_offsets(layer_faces())[k]`), copied from the images with their aprons by
+    /// `apron` on first use and kept. Refused when the device's texel buffers cannot hold them
+    /// all.
+    pub fn layer_texels(&self, gpu: &GpuContext, apron: &LayerApronPass) -> Result<&Buffer> {
+        kept_texels(&self.layer_texels, (gpu, apron), &[self])
+    }
+}
+
+/// The pipeline of layer_apron.comp, which writes an environment's `brdf` layer texels with a
+/// one-texel apron around each face ([`concatenated_texels`]). Made once by whoever draws (a
+/// renderer keeps one), not per environment: a batch that sweeps the map's rotation makes an
+/// environment per job.
+pub struct LayerApronPass {
+    pipeline: ComputePipeline,
+}
+
+impl LayerApronPass {
+    pub fn new(gpu: &GpuContext) -> Result<Self> {
+        Ok(Self {
+            pipeline: gpu.create_compute_pipeline(
+                "layer_apron.comp",
+                crate::gpu::shaders::LAYER_APRON_COMP,
+                &APRON_BINDINGS,
+                push_size::<LayerApronParams>(),
+            )?,
+        })
     }
 }
 
 /// The buffer `kept` holds, or [`concatenated_texels`] of `envs` made now and kept there.
 fn kept_texels<'a>(
     kept: &'a std::sync::OnceLock<Buffer>,
-    gpu: &GpuContext,
+    (gpu, apron): (&GpuContext, &LayerApronPass),
     envs: &[&GpuEnvironment],
 ) -> Result<&'a Buffer> {
     if let Some(buffer) = kept.get() {
         return Ok(buffer);
     }
-    let _ = kept.set(concatenated_texels(gpu, envs)?);
+    let _ = kept.set(concatenated_texels(gpu, apron, envs)?);
     kept.get()
         .ok_or_else(|| Error::Internal("the layer texel buffer was not kept".into()))
 }
 
 /// The layers of `envs`, one environment after the other, in one device-local texel buffer
 /// (layer k of the first from `layer_texel_offsets(layer_faces())[k]`): copied from the images
-/// into a buffer face after face, then written with their aprons by layer_apron.comp (twin:
-/// `brdf_quadrature::apron_texels`). The pipeline is made here: once per environment, whose
-/// texels are kept. Refused when the device's texel buffers cannot hold them all.
-fn concatenated_texels(gpu: &GpuContext, envs: &[&GpuEnvironment]) -> Result<Buffer> {
+/// into a buffer face after face, then written with their aprons by `apron` (twin:
+/// `brdf_quadrature::apron_texels`). Refused when the device's texel buffers cannot hold them
+/// all.
+fn concatenated_texels(
+    gpu: &GpuContext,
+    apron: &LayerApronPass,
+    envs: &[&GpuEnvironment],
+) -> Result<Buffer> {
     let layers: Vec<&Image> = envs.iter().flat_map(|env| env.layers.iter()).collect();
     let faces: Vec<u32> = layers.iter().map(|image| image.desc().width).collect();
     let (offsets, total) = layer_texel_offsets(faces.iter().copied());
@@ -324,14 +358,8 @@ fn concatenated_texels(gpu: &GpuContext, envs: &[&GpuEnvironment]) -> Result<Buf
         total * 16,
         BufferUsage::UNIFORM_TEXEL | BufferUsage::STORAGE_TEXEL | BufferUsage::TRANSFER_SRC,
     ))?;
-    let apron = gpu.create_compute_pipeline(
-        "layer_apron.comp",
-        crate::gpu::shaders::LAYER_APRON_COMP,
-        &APRON_BINDINGS,
-        push_size::<LayerApronParams>(),
-    )?;
     let set = gpu.create_descriptor_set(
-        apron.layout(),
+        apron.pipeline.layout(),
         &[
             (
                 PREFILTER_SOURCE_BINDING,
@@ -350,7 +378,7 @@ fn concatenated_texels(gpu: &GpuContext, envs: &[&GpuEnvironment]) -> Result<Buf
             rec.image_barrier(image, transfer_src, sampled);
         }
         rec.memory_barrier(Access::TransferWrite, Access::ComputeShaderRead);
-        rec.bind_compute(&apron, &set);
+        rec.bind_compute(&apron.pipeline, &set);
         for ((&face_size, &source), &dest) in faces.iter().zip(&sources).zip(&offsets) {
             // Both below `total`, which the limit keeps within an i32.
             let constants = LayerApronParams {
@@ -358,7 +386,7 @@ fn concatenated_texels(gpu: &GpuContext, envs: &[&GpuEnvironment]) -> Result<Buf
                 source_first: source as u32,
                 dest_first: dest as u32,
             };
-            rec.push_constants(&apron, bytemuck::bytes_of(&constants));
+            rec.push_constants(&apron.pipeline, bytemuck::bytes_of(&constants));
             rec.dispatch(groups(face_size + 2), groups(face_size + 2), 6);
         }
         // The draws (and the compute evaluator) that read the buffer are later submits; the
@@ -676,8 +704,12 @@ fn check_source(source: &Equirect, intensity: f64, rotation_deg: f64) -> Result<
 impl GpuEnvironment {
     /// Copies [`layer_texels`](Self::layer_texels) back to the host (tests): the layers with
     /// their aprons, from `layer_texel_offsets(layer_faces())`.
-    pub fn read_layer_texels(&self, gpu: &GpuContext) -> Result<Vec<[f32; 4]>> {
-        let texels = self.layer_texels(gpu)?;
+    pub fn read_layer_texels(
+        &self,
+        gpu: &GpuContext,
+        apron: &LayerApronPass,
+    ) -> Result<Vec<[f32; 4]>> {
+        let texels = self.layer_texels(gpu, apron)?;
         let readback =
             gpu.create_buffer(BufferDesc::readback("layer texel readback", texels.size()))?;
         gpu.submit_and_wait(|rec| {

@@ -17,6 +17,7 @@ use shikki::environment::cube::{
 use shikki::environment::definition::{irradiance_definition, prefiltered_radiance_definition};
 use shikki::environment::gpu::{
     default_params, largest_face_size, layer_texel_offsets, GpuEnvironment, GpuPrefilter,
+    LayerApronPass,
 };
 use shikki::environment::params::ViewBlur;
 use shikki::environment::{oracle, CubeImage, Equirect, PrefilterParams};
@@ -555,7 +556,9 @@ fn the_brdf_models_layer_texels_carry_the_seam_rule_in_their_aprons() {
     let (offsets, total) = layer_texel_offsets(env.layer_faces());
     assert_eq!(total as usize, want.len());
     assert_eq!(offsets.len(), host.layers.len());
-    let got = env.read_layer_texels(&gpu).unwrap();
+    let got = env
+        .read_layer_texels(&gpu, &LayerApronPass::new(&gpu).unwrap())
+        .unwrap();
     assert_eq!(got.len(), want.len());
     let wrong = got.iter().zip(&want).filter(|(g, w)| g != w).count();
     assert_eq!(wrong, 0, "{wrong} of {} texels differ", want.len());

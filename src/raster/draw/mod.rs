@@ -49,7 +49,7 @@ pub use types::{
 };
 
 use crate::environment::brdf_quadrature::AlbedoCache;
-use crate::environment::gpu::GpuEnvironment;
+use crate::environment::gpu::{GpuEnvironment, LayerApronPass};
 use crate::environment::{CubeImage, PrefilteredEnvironment};
 use crate::gpu::shaders::interface::{
     Frame, ObjectGeometry, SELF_HITS_BACK_CLEAR, SELF_HITS_FRONT_CLEAR, TRACE_MASK_SHARED,
@@ -98,6 +98,9 @@ struct Resources {
     timestamps: Option<TimestampPool>,
     /// Made by the first draw denoised on the device.
     denoise: Option<DenoisePass>,
+    /// Made by the first draw that reads the `brdf` quadrature's layer texels (each
+    /// environment's are written once, with their aprons, and kept with it).
+    apron: Option<LayerApronPass>,
 }
 
 impl Resources {
@@ -108,6 +111,7 @@ impl Resources {
             black_environment: None,
             timestamps: None,
             denoise: None,
+            apron: None,
         })
     }
 }
@@ -285,6 +289,7 @@ impl LacquerRenderer {
             black_environment,
             timestamps,
             denoise,
+            apron,
         } = get_or_try_insert(&mut self.resources, || Resources::new(gpu))?;
         let environment = match scene.environment {
             Some(environment) => environment,
@@ -324,12 +329,21 @@ impl LacquerRenderer {
             environment,
             (&knots, &albedo, scene_radius),
         )?;
+        // The `brdf` quadrature's layer texels, made on the environment's first such draw.
+        let layer_texels = match scene.reads_brdf_quadrature() {
+            true => {
+                let apron = get_or_try_insert(apron, || LayerApronPass::new(gpu))?;
+                Some(environment.brdf_sources(gpu, apron)?.texels)
+            }
+            false => None,
+        };
         let inputs = DrawInputs {
             gpu,
             scene,
             meshes,
             settings,
             environment,
+            layer_texels,
             sampler,
             stamps,
             scene_radius,
@@ -390,6 +404,8 @@ struct DrawInputs<'a> {
     settings: &'a RenderSettings,
     /// The scene's environment, or the black one.
     environment: &'a GpuEnvironment,
+    /// Its `brdf` layer texels where the draw reads the quadrature.
+    layer_texels: Option<&'a Buffer>,
     sampler: &'a Sampler,
     stamps: Option<&'a TimestampPool>,
     scene_radius: f64,
@@ -540,10 +556,7 @@ fn draw_deferred(
     };
     // Without the `brdf` model's quadrature nothing reads the layer texels: any texel buffer
     // fills the binding.
-    let layer_texels = match scene.reads_brdf_quadrature() {
-        true => inputs.environment.brdf_sources(gpu)?.texels,
-        false => &buffers.knots,
-    };
+    let layer_texels = inputs.layer_texels.unwrap_or(&buffers.knots);
     let object_sets = inputs.object_sets(&gbuffer, buffers)?;
     let objects: Vec<DrawnMesh<'_>> = inputs.meshes.iter().copied().zip(&object_sets).collect();
     let targets = targets.deferred(gpu, inputs.target_size())?;
