@@ -24,6 +24,13 @@ layout(set = 0, binding = OBJECT_MATERIAL_BINDING) uniform textureBuffer object_
 #include "gbuffer_samples.glsl"
 #include "sequence.glsl"
 
+// `same_surface`'s bounds: normals within 0.26° (cos 0.99999) and points within an eighth of the
+// pixel's footprint. Neighbouring triangles of the built-in bowl, extended to the pixel centre,
+// part by far less in nine pixels of ten; a silhouette by far more (BENCHMARKS.md, "Surfaces
+// shaded once a pixel").
+const float SURFACE_MERGE_COS = 0.99999;
+const float SURFACE_MERGE_SHARE = 0.125;
+
 #ifdef RAY_TRACING
 #include "light_between.glsl"
 #endif
@@ -72,6 +79,20 @@ vec3 shade_object(int object, vec3 position, vec4 normal, uint key, out vec4 int
 #endif
 }
 
+// Whether G-buffer sample (q, m) lies on the surface of sample (p, n), both interpolated at the
+// same pixel centre (w: the object; the normals need not be unit): the same object, normals
+// within SURFACE_MERGE_COS, points within SURFACE_MERGE_SHARE of the pixel's `footprint`.
+// Neighbouring triangles of a smooth mesh pass; a silhouette over the same mesh (a bowl's rim
+// before its inside) and a crease do not, and stay shaded apart, as a forward draw with an MSAA
+// resolve shades them.
+bool same_surface(vec4 q, vec4 m, vec4 p, vec4 n, float footprint) {
+    vec3 d = q.xyz - p.xyz;
+    float reach = SURFACE_MERGE_SHARE * footprint;
+    float nm = dot(n.xyz, m.xyz);
+    float bound = SURFACE_MERGE_COS * SURFACE_MERGE_COS * dot(n.xyz, n.xyz) * dot(m.xyz, m.xyz);
+    return q.w == p.w && dot(d, d) <= reach * reach && nm > 0.0 && nm * nm >= bound;
+}
+
 // Pixel `texel` of the target, whose centre is `centre` (gl_FragCoord.xy): the average of its
 // samples (`radiance`) and, with RAY_TRACING, the integral's share and variance (`integral`).
 // False, with nothing written, where no sample is covered.
@@ -98,12 +119,18 @@ bool shade_pixel(ivec2 texel, vec2 centre, out vec4 radiance, out vec4 integral_
         vec2 pixel = vec2(centre.x, centre.y + frame.strip_offset.y);
         sum += background_radiance(pixel) * float(uncovered);
     }
-    // Samples of one triangle hold bit-identical values (interpolated at the pixel centre), so
-    // each distinct (position, normal, object) is shaded once and weighted by its sample count.
+    // Each surface the pixel's samples see is shaded once and weighted by its sample count.
+    // Samples of one triangle hold bit-identical values (interpolated at the pixel centre); so,
+    // nearly, do the samples of neighbouring triangles of one smooth mesh, and those are shaded
+    // once too, at their mean (`same_surface`). Shaded apart, a mesh of pixel-sized triangles
+    // was shaded twice or more in one pixel of six, and llvmpipe runs a block's shading again
+    // wherever one of its pixels does (BENCHMARKS.md, "Surfaces shaded once a pixel").
     // A loop, not a branch per sample: a loop repeats only while some lane needs it, but both
     // sides of every branch run (quirk `loop_body_runs_when_no_lane_enters`).
     // coverage_body.glsl's depth test lets through only pixels with a covered sample; were one to
     // have none, the loop body below adds nothing (weight 0) and reads a valid object.
+    // The pixel's footprint at unit distance from the eye.
+    float pixel_angle = 2.0 * frame.camera_params.x / frame.camera_params.w;
     uint todo = covered;
     do {
         int first = max(findLSB(todo), 0);
@@ -115,18 +142,30 @@ bool shade_pixel(ivec2 texel, vec2 centre, out vec4 radiance, out vec4 integral_
                 n = normal[s];
             }
         }
+        float footprint = pixel_angle * length(p.xyz - frame.eye.xyz);
         uint same = 0u;
+        // The mean as offsets from the first sample's values: exactly those where every sample
+        // of the surface is bit-identical (one triangle), so such pixels shade as before.
+        vec3 offset_p = vec3(0.0);
+        vec3 offset_n = vec3(0.0);
         for (int s = 0; s < SAMPLE_COUNT; ++s) {
-            if (position[s] == p && normal[s] == n) {
+            bool member = ((todo >> uint(s)) & 1u) != 0u
+                && same_surface(position[s], normal[s], p, n, footprint);
+            if (member) {
                 same |= 1u << s;
+                offset_p += position[s].xyz - p.xyz;
+                offset_n += normal[s].xyz - n.xyz;
             }
         }
         // `first` always: a NaN (never written by gbuffer.frag) must not stall the loop.
-        same = (same & todo) | (todo != 0u ? 1u << first : 0u);
+        same |= todo != 0u ? 1u << first : 0u;
+        float count = float(bitCount(same));
+        p.xyz += offset_p / count;
+        n.xyz += offset_n / count;
         vec4 integral;
         vec3 radiance = shade_object(max(int(p.w) - 1, 0), p.xyz, n, key, integral);
-        float share = float(bitCount(same)) / float(SAMPLE_COUNT);
-        sum += vec4(radiance, 1.0) * float(bitCount(same));
+        float share = count / float(SAMPLE_COUNT);
+        sum += vec4(radiance, 1.0) * count;
         integral_sum += integral * vec4(vec3(share), share * share);
         todo &= ~same;
     } while (todo != 0u);

@@ -3,3 +3,4 @@ mod denoise;
 mod forward;
 mod light_between;
 mod shadows;
+mod surfaces;
