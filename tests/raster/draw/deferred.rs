@@ -47,7 +47,8 @@ fn camera() -> Camera {
     }
 }
 
-fn environment(gpu: &GpuContext) -> GpuEnvironment {
+/// A small prefiltered test environment (also the shading-pass tests' in `surfaces.rs`).
+pub(super) fn environment(gpu: &GpuContext) -> GpuEnvironment {
     let params = PrefilterParams {
         face_size: 32,
         layers: 4,

@@ -5,34 +5,17 @@
 
 use crate::common;
 
-use common::{assert_no_validation_messages, rel_err, synthetic_environment, validated_gpu};
+use super::deferred::environment;
+use common::{assert_no_validation_messages, rel_err, validated_gpu};
 use glam::DVec3;
-use shikki::environment::gpu::{GpuEnvironment, GpuPrefilter};
-use shikki::environment::params::{PrefilterParams, ViewBlur};
-use shikki::environment::EnvironmentLight;
+use shikki::environment::gpu::GpuEnvironment;
+use shikki::environment::params::ViewBlur;
 use shikki::gpu::GpuContext;
 use shikki::model::LacquerMaterial;
 use shikki::output::HdrImage;
 use shikki::raster::draw::{Background, DrawObject, DrawScene, LacquerRenderer, RenderSettings};
 use shikki::raster::mesh::{self, Mesh};
 use shikki::raster::{BuiltinMesh, Camera};
-
-fn environment(gpu: &GpuContext) -> GpuEnvironment {
-    let params = PrefilterParams {
-        face_size: 32,
-        layers: 4,
-        ..PrefilterParams::for_source_width(128)
-    };
-    GpuPrefilter::new(gpu)
-        .expect("prefilter pipelines")
-        .run(
-            gpu,
-            &synthetic_environment(128, 64),
-            &params,
-            EnvironmentLight::default(),
-        )
-        .expect("prefiltered environment")
-}
 
 /// `meshes` as objects of one smooth red lacquer, identity transforms, under the default lights
 /// and `env`, on a transparent background.
