@@ -1,7 +1,8 @@
 // The lacquer draw's shading pass (shade.frag, shade_ms.frag), a full-screen triangle over a
 // single-sampled target: each pixel reads the G-buffer samples gbuffer.frag wrote, shades each
-// distinct surface once (lacquer_shade.glsl), gives uncovered samples the background and writes
-// the average of its samples: what forward shading followed by an MSAA resolve gives.
+// distinct surface once (lacquer_shade.glsl; neighbouring triangles of one smooth mesh are one
+// surface, `same_surface`), gives uncovered samples the background and writes the average of its
+// samples: what forward shading followed by an MSAA resolve gives.
 //
 // Why a separate pass: llvmpipe shades a triangle in whole 4×4 blocks, so on a mesh of ~6-pixel
 // triangles a forward lacquer shader ran on every block each triangle touched (and on hidden
