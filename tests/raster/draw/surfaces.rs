@@ -6,19 +6,19 @@
 use crate::common;
 
 use super::deferred::environment;
+use super::shadows::{draw_objects, material, scene};
 use common::{assert_no_validation_messages, rel_err, validated_gpu};
 use glam::DVec3;
 use shikki::environment::gpu::GpuEnvironment;
-use shikki::environment::params::ViewBlur;
+use shikki::environment::EnvironmentModel;
 use shikki::gpu::GpuContext;
-use shikki::model::LacquerMaterial;
 use shikki::output::HdrImage;
-use shikki::raster::draw::{Background, DrawObject, DrawScene, LacquerRenderer, RenderSettings};
+use shikki::raster::draw::{LacquerRenderer, RenderSettings};
 use shikki::raster::mesh::{self, Mesh};
 use shikki::raster::{BuiltinMesh, Camera};
 
 /// `meshes` as objects of one smooth red lacquer, identity transforms, under the default lights
-/// and `env`, on a transparent background.
+/// and `env` (`paper` model), on a transparent background (shadows.rs's draw, at `settings`).
 fn render(
     gpu: &GpuContext,
     env: &GpuEnvironment,
@@ -26,30 +26,15 @@ fn render(
     camera: &Camera,
     settings: RenderSettings,
 ) -> HdrImage {
-    let material = LacquerMaterial::preset("smooth-red").unwrap();
-    let (brdf, fresnel) = (
-        material.brdf_params().unwrap(),
-        material.fresnel_table().unwrap(),
-    );
-    let objects: Vec<DrawObject> = meshes
-        .iter()
-        .map(|mesh| DrawObject {
-            mesh,
-            brdf: &brdf,
-            fresnel: &fresnel,
-            view_blur: ViewBlur::of(&material),
-        })
-        .collect();
+    let red = material("smooth-red");
+    let objects = draw_objects((meshes, &vec![&red; meshes.len()]));
     let lights = shikki::raster::default_lights();
-    let scene = DrawScene {
-        objects: &objects,
-        camera,
-        lights: &lights,
-        environment: Some(env),
-        environment_model: Default::default(),
-        ray_tracing: None,
-        background: Background::Transparent,
-    };
+    let scene = scene(
+        &objects,
+        (camera, &lights),
+        (Some(env), EnvironmentModel::Paper),
+        None,
+    );
     LacquerRenderer::new()
         .render(gpu, &scene, &settings)
         .unwrap()
