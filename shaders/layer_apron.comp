@@ -3,8 +3,9 @@
 // one-texel apron around each face: texel (i, j), i, j ∈ [−1, M], of face f holds the texel of the
 // direction through (i, j)'s centre on the face that direction selects. Inside the face that is
 // texel (i, j) itself; in the apron, the seam rule of the lookups' bilinear taps
-// (brdf_environment.glsl `layer_bilinear`), which then never leave a face's rows. CPU twin:
-// environment::brdf_quadrature::apron_texels.
+// (brdf_environment.glsl `layer_bilinear`), which then never leave a face's rows. Each texel
+// written holds two of them, (i, j) and (i + 1, j) (layer_pair.glsl; beyond the apron, 0). CPU
+// twin: environment::brdf_quadrature::apron_texels.
 
 #include "interface.glsl"
 
@@ -16,12 +17,26 @@ layout(push_constant) uniform PushConstants {
     LayerApronParams params;
 };
 
+#include "layer_pair.glsl"
+
 // RGBA32F texels.
 #include "texel_buffer.glsl"
 layout(set = 0, binding = PREFILTER_SOURCE_BINDING) uniform textureBuffer src;
 // A storage texel buffer, not a storage buffer: a large map's layers exceed
 // maxStorageBufferRange (environment/gpu.rs APRON_BINDINGS).
-layout(set = 0, binding = PREFILTER_DEST_BINDING, rgba32f) uniform writeonly imageBuffer dst;
+layout(set = 0, binding = PREFILTER_DEST_BINDING, rgba32ui) uniform writeonly uimageBuffer dst;
+
+// The texel of face `face`'s apron texel (i, j), i, j ∈ [−1, M]: the source texel of the
+// direction through its centre on the face that direction selects.
+vec3 apron_texel(int face, int i, int j, int m) {
+    // Face coordinates of the centre, 2·(i + ½)/M − 1.
+    vec2 c = 2.0 * (vec2(i, j) + 0.5) / float(m) - 1.0;
+    int held;
+    vec2 st;
+    select_face(face_direction(face, c.x, c.y), held, st);
+    ivec2 ij = clamp(ivec2(floor((st + 1.0) * 0.5 * float(m))), ivec2(0), ivec2(m - 1));
+    return texelFetch(src, int(params.source_first) + (held * m + ij.y) * m + ij.x).rgb;
+}
 
 void main() {
     uvec3 id = gl_GlobalInvocationID;
@@ -31,13 +46,9 @@ void main() {
         return;
     }
     int face = int(id.z);
-    // Face coordinates of texel (i, j)'s centre, 2·(i + ½)/M − 1, i = −1 and M in the apron.
-    vec2 c = 2.0 * (vec2(ivec2(id.xy) - 1) + 0.5) / float(m) - 1.0;
-    int held;
-    vec2 st;
-    select_face(face_direction(face, c.x, c.y), held, st);
-    ivec2 ij = clamp(ivec2(floor((st + 1.0) * 0.5 * float(m))), ivec2(0), ivec2(m - 1));
-    int texel = int(params.source_first) + (held * m + ij.y) * m + ij.x;
+    ivec2 ij = ivec2(id.xy) - 1;
+    vec3 first = apron_texel(face, ij.x, ij.y, m);
+    vec3 second = ij.x < m ? apron_texel(face, ij.x + 1, ij.y, m) : vec3(0.0);
     int index = int(params.dest_first) + (face * padded + int(id.y)) * padded + int(id.x);
-    imageStore(dst, index, texelFetch(src, texel));
+    imageStore(dst, index, layer_pack(first, second));
 }

@@ -15,8 +15,8 @@
 // (`env_layer_texels`), with one seam rule, the twin's: a tap beyond its face reads the texel
 // holding the tap's direction on the face that direction selects. Each face is stored with a
 // one-texel apron that holds those texels (layer_apron.comp), so a lookup reads four texels
-// without a branch. The sampler's own cube filtering leaves the edges and corners to the
-// implementation.
+// without a branch, stored two to a texel (layer_pair.glsl): two reads. The sampler's own cube
+// filtering leaves the edges and corners to the implementation.
 //
 // The layers it reads are the residual of the map's bright split (environment/bright.rs); the
 // bright parts come back as the frame's `env_light_*` lights, each through the lobe widened by its
@@ -34,7 +34,9 @@
 
 #include "cubemap.glsl"
 #include "texel_buffer.glsl"
-layout(set = 0, binding = ENV_LAYER_TEXELS_BINDING) uniform textureBuffer env_layer_texels;
+#include "layer_pair.glsl"
+// Two texels of a layer's face rows in each (layer_pair.glsl).
+layout(set = 0, binding = ENV_LAYER_TEXELS_BINDING) uniform utextureBuffer env_layer_texels;
 
 // Lobe samples of filtered importance sampling where the camera looks and at the paths' hits
 // (brdf_quadrature.rs `BRDF_SAMPLES`, `BRDF_HIT_SAMPLES`).
@@ -67,7 +69,8 @@ LayerPair layer_pair_texels(float beta, int base) {
 // That layer at the direction that select_face put at (face, st), bilinear over the four texel
 // centres around it. Each face is stored with a one-texel apron (layer_apron.comp): a tap beyond
 // the face reads the apron texel, which holds the texel of the tap's direction on the face that
-// direction selects, so every lookup reads four texels of one face's rows, without a branch.
+// direction selects, so every lookup reads four texels of one face's rows, without a branch: two
+// pairs (layer_pair.glsl), (x0, x0 + 1) of rows y0 and y0 + 1.
 vec3 layer_bilinear(int isize, int first, int face, vec2 st) {
     float size = float(isize);
     vec2 xy = (st + 1.0) * 0.5 * size - 0.5;
@@ -77,10 +80,12 @@ vec3 layer_bilinear(int isize, int first, int face, vec2 st) {
     ivec2 ij = ivec2(xy0) + 1;
     int stride = isize + 2;
     int row = first + (face * stride + ij.y) * stride + ij.x;
-    vec3 a = texelFetch(env_layer_texels, row).rgb;
-    vec3 b = texelFetch(env_layer_texels, row + 1).rgb;
-    vec3 c = texelFetch(env_layer_texels, row + stride).rgb;
-    vec3 e = texelFetch(env_layer_texels, row + stride + 1).rgb;
+    uvec4 upper = texelFetch(env_layer_texels, row);
+    uvec4 lower = texelFetch(env_layer_texels, row + stride);
+    vec3 a = layer_first(upper);
+    vec3 b = layer_second(upper);
+    vec3 c = layer_first(lower);
+    vec3 e = layer_second(lower);
     vec3 top = a + (b - a) * f.x;
     vec3 bottom = c + (e - c) * f.x;
     return top + (bottom - top) * f.y;

@@ -123,7 +123,7 @@ pub fn brdf_environment_specular_gpu(
         &[
             (FRAME_BINDING, Resource::Buffer(&frame_buf)),
             (FRESNEL_KNOTS_BINDING, Resource::TexelBuffer(&knots_buf)),
-            (ENV_LAYER_TEXELS_BINDING, Resource::TexelBuffer(texels)),
+            (ENV_LAYER_TEXELS_BINDING, Resource::UintTexelBuffer(texels)),
             (ENV_EVAL_PARAMS_BINDING, Resource::Buffer(&params_buf)),
             (ENV_EVAL_DIRECTIONS_BINDING, Resource::Buffer(&dirs_buf)),
             (ENV_EVAL_VALUES_BINDING, Resource::Buffer(&values_buf)),

@@ -7,7 +7,9 @@
 //! (filtered importance sampling, Křivánek & Colbert, GPU Gems 3 ch. 20), which is what keeps a
 //! sharp layer from aliasing. The lookups are bilinear over texel centres with one seam rule: a
 //! tap beyond its face reads the texel holding the tap's direction on the face that direction
-//! selects (the shaders read it from each face's apron, [`apron_texels`]). `brdf_definition.rs` is the brute-force ground truth it converges to.
+//! selects (the shaders read it from each face's apron, [`apron_texels`]), and every texel is
+//! read as the shaders store it, its channels rounded to `LAYER_CODE_BITS` bits
+//! (`layer_pair.rs`). `brdf_definition.rs` is the brute-force ground truth it converges to.
 
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -16,6 +18,7 @@ use super::brdf_definition::specular_albedo;
 use super::bright::BrightLight;
 use super::cube::{direction_to_face, face_direction};
 use super::image::{CubeImage, PrefilteredEnvironment};
+use super::layer_pair;
 use super::params::{layer_blend, texel_read_variance};
 use crate::gpu::shaders::interface::{ALBEDO_KNOTS, BRIGHT_LOBE_CULL, FIBONACCI_STEP};
 use crate::model::brdf::cook_torrance_g;
@@ -670,38 +673,41 @@ pub fn layered_radiance(env: &PrefilteredEnvironment, d: DVec3, beta: f64) -> [f
     std::array::from_fn(|c| lo[c] + (hi[c] - lo[c]) * t)
 }
 
-/// The texel of `cube` holding direction `d`.
+/// The texel of `cube` holding direction `d`, as the shaders' layer texels store it
+/// ([`layer_pair::stored`]).
 fn cube_texel(cube: &CubeImage, d: DVec3) -> [f64; 3] {
-    let texel = cube_texel_rgba(cube, d);
-    [texel[0], texel[1], texel[2]].map(f64::from)
+    cube_texel_rgb(cube, d).map(|x| f64::from(layer_pair::stored(x)))
 }
 
-/// [`cube_texel`] as stored.
-fn cube_texel_rgba(cube: &CubeImage, d: DVec3) -> [f32; 4] {
+/// The texel of `cube` holding direction `d`, as the cube holds it.
+fn cube_texel_rgb(cube: &CubeImage, d: DVec3) -> [f32; 3] {
     let size = cube.face_size;
     let (face, sc, tc) = direction_to_face(d);
     let index = |c: f64| {
         (((c + 1.0) * 0.5 * f64::from(size)).floor() as i64).clamp(0, i64::from(size) - 1) as u32
     };
-    cube.get(face, index(sc), index(tc))
+    let texel = cube.get(face, index(sc), index(tc));
+    [texel[0], texel[1], texel[2]]
 }
 
 /// The texels of `cube` with a one-texel apron around each face, as the shaders read a layer
 /// (layer_apron.comp, its GPU twin): face after face, row after row, (M + 2)² texels a face, texel
-/// (i, j) for i, j ∈ [−1, M] the texel of the direction through (i, j)'s centre on the face that
-/// direction selects, which is the tap [`cube_bilinear`] reads there.
-pub fn apron_texels(cube: &CubeImage) -> Vec<[f32; 4]> {
+/// (i, j) for i, j ∈ [−1, M] holding the texel of the direction through (i, j)'s centre on the
+/// face that direction selects, which is the tap [`cube_bilinear`] reads there, and the next one
+/// in its row, (i + 1, j) (0 beyond the apron), packed by [`layer_pair::pack`].
+pub fn apron_texels(cube: &CubeImage) -> Vec<[u32; 4]> {
     let size = cube.face_size;
     let coord = |k: i64| 2.0 * (k as f64 + 0.5) / f64::from(size) - 1.0;
     let last = i64::from(size);
     let mut texels = Vec::with_capacity(6 * (size as usize + 2).pow(2));
     for face in 0..6 {
+        let texel = |i: i64, j: i64| match i <= last {
+            true => cube_texel_rgb(cube, face_direction(face, coord(i), coord(j))),
+            false => [0.0; 3],
+        };
         for j in -1..=last {
             for i in -1..=last {
-                texels.push(cube_texel_rgba(
-                    cube,
-                    face_direction(face, coord(i), coord(j)),
-                ));
+                texels.push(layer_pair::pack(texel(i, j), texel(i + 1, j)));
             }
         }
     }
@@ -756,8 +762,9 @@ mod tests {
 
     #[test]
     fn bilinear_lookups_reproduce_a_linear_field_across_faces() {
-        // Texels hold d.x + 2·d.y − d.z at their centres. Inside a face, bilinear interpolation
-        // of that field is close to it; across an edge the tap from the neighbour face must be
+        // Texels hold 3 + d.x + 2·d.y − d.z at their centres (positive, like radiance: a layer
+        // texel stores a negative value as 0). Inside a face, bilinear interpolation of that
+        // field is close to it; across an edge the tap from the neighbour face must be
         // the one holding the same direction, or the result jumps.
         let size = 32;
         let mut cube = CubeImage::new(size);
@@ -765,7 +772,7 @@ mod tests {
             for j in 0..size {
                 for i in 0..size {
                     let d = super::super::cube::texel_direction(face, i, j, size);
-                    let value = (d.x + 2.0 * d.y - d.z) as f32;
+                    let value = (3.0 + d.x + 2.0 * d.y - d.z) as f32;
                     let index = cube.index(face, i, j);
                     cube.texels[index] = [value, value, value, 1.0];
                 }
@@ -775,19 +782,20 @@ mod tests {
         for k in 0..2000 {
             let t = k as f64 * 0.618_033_988_75;
             let d = DVec3::new((t * 7.1).sin(), (t * 3.3).cos(), (t * 5.7).sin()).normalize();
-            let want = d.x + 2.0 * d.y - d.z;
+            let want = 3.0 + d.x + 2.0 * d.y - d.z;
             let got = cube_bilinear(&cube, d)[0];
             worst = worst.max((got - want).abs());
         }
         // Measured 0.0154: bilinear interpolation's curvature error on 32² faces (texels ~0.05
-        // rad). A tap from the wrong texel at an edge costs up to a texel's step of the field,
+        // rad); the stored texels' rounding adds at most 5.5·2⁻¹⁴ ≈ 3e-4. A tap from the wrong texel at an edge costs up to a texel's step of the field,
         // ≈ √6·0.05 ≈ 0.12, so 0.03 would catch it.
         assert!(worst < 0.03, "{worst}");
     }
 
     /// The shaders' bilinear read of a layer with aprons (brdf_environment.glsl
-    /// `layer_bilinear`): four texels of the face's padded rows, in f64 as `cube_bilinear`.
-    fn apron_bilinear(texels: &[[f32; 4]], size: u32, d: DVec3) -> [f64; 3] {
+    /// `layer_bilinear`): four texels of the face's padded rows in two pairs, in f64 as
+    /// `cube_bilinear`.
+    fn apron_bilinear(texels: &[[u32; 4]], size: u32, d: DVec3) -> [f64; 3] {
         let (face, sc, tc) = direction_to_face(d);
         let m = f64::from(size);
         let (x, y) = ((sc + 1.0) * 0.5 * m - 0.5, (tc + 1.0) * 0.5 * m - 0.5);
@@ -795,13 +803,11 @@ mod tests {
         let (fx, fy) = (x - x0, y - y0);
         let stride = size as usize + 2;
         let row = (face * stride + (y0 as i64 + 1) as usize) * stride + (x0 as i64 + 1) as usize;
-        let tap = |k: usize| texels[k].map(f64::from);
-        let (a, b, c, e) = (
-            tap(row),
-            tap(row + 1),
-            tap(row + stride),
-            tap(row + stride + 1),
-        );
+        let pair = |k: usize| {
+            let (first, second) = layer_pair::unpack(texels[k]);
+            (first.map(f64::from), second.map(f64::from))
+        };
+        let ((a, b), (c, e)) = (pair(row), pair(row + stride));
         std::array::from_fn(|k| {
             let top = a[k] + (b[k] - a[k]) * fx;
             let bottom = c[k] + (e[k] - c[k]) * fx;
@@ -825,7 +831,9 @@ mod tests {
                 for j in 0..size {
                     for i in 0..size {
                         let padded = (face * stride + j as usize + 1) * stride + i as usize + 1;
-                        assert_eq!(texels[padded], cube.get(face, i, j));
+                        let texel = cube.get(face, i, j);
+                        let stored = [texel[0], texel[1], texel[2]].map(layer_pair::stored);
+                        assert_eq!(layer_pair::unpack(texels[padded]).0, stored);
                     }
                 }
             }

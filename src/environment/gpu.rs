@@ -365,7 +365,7 @@ fn concatenated_texels(
                 PREFILTER_SOURCE_BINDING,
                 Resource::TexelBuffer(&faces_copied),
             ),
-            (PREFILTER_DEST_BINDING, Resource::TexelBuffer(&buffer)),
+            (PREFILTER_DEST_BINDING, Resource::UintTexelBuffer(&buffer)),
         ],
     )?;
     let sampled = ImageUse::new(Access::GraphicsShaderRead, Layout::ShaderRead);
@@ -703,12 +703,13 @@ fn check_source(source: &Equirect, intensity: f64, rotation_deg: f64) -> Result<
 
 impl GpuEnvironment {
     /// Copies [`layer_texels`](Self::layer_texels) back to the host (tests): the layers with
-    /// their aprons, from `layer_texel_offsets(layer_faces())`.
+    /// their aprons, from `layer_texel_offsets(layer_faces())`, two texels in each
+    /// (environment/layer_pair.rs).
     pub fn read_layer_texels(
         &self,
         gpu: &GpuContext,
         apron: &LayerApronPass,
-    ) -> Result<Vec<[f32; 4]>> {
+    ) -> Result<Vec<[u32; 4]>> {
         let texels = self.layer_texels(gpu, apron)?;
         let readback =
             gpu.create_buffer(BufferDesc::readback("layer texel readback", texels.size()))?;

@@ -22,6 +22,7 @@ pub mod definition;
 pub mod disk_cache;
 pub mod gpu;
 pub mod image;
+pub mod layer_pair;
 pub mod light_bins;
 pub mod load;
 pub mod oracle;

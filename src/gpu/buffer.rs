@@ -18,9 +18,11 @@ impl BufferUsage {
     pub const INDEX: Self = Self(vk::BufferUsageFlags::INDEX_BUFFER);
     pub const UNIFORM: Self = Self(vk::BufferUsageFlags::UNIFORM_BUFFER);
     pub const STORAGE: Self = Self(vk::BufferUsageFlags::STORAGE_BUFFER);
-    /// Read in shaders as a `textureBuffer` of RGBA32F texels (`Resource::TexelBuffer`).
+    /// Read in shaders as a `textureBuffer` of RGBA32F texels (`Resource::TexelBuffer`), or a
+    /// `utextureBuffer` of RGBA32UI ones (`Resource::UintTexelBuffer`).
     pub const UNIFORM_TEXEL: Self = Self(vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER);
-    /// Written in shaders as an `imageBuffer` of RGBA32F texels (`Resource::TexelBuffer` at a
+    /// Written in shaders as an `imageBuffer` of RGBA32F texels, or a `uimageBuffer` of RGBA32UI
+    /// ones (`Resource::TexelBuffer` or `UintTexelBuffer` at a
     /// `BindingKind::StorageTexelBuffer`): unlike a storage buffer, as large as a texel buffer
     /// may be (maxTexelBufferElements, not maxStorageBufferRange).
     pub const STORAGE_TEXEL: Self = Self(vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER);

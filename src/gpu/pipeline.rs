@@ -444,6 +444,8 @@ pub enum Resource<'a> {
     /// The whole buffer as RGBA32F texels (created with `BufferUsage::UNIFORM_TEXEL`, or
     /// `STORAGE_TEXEL` for a `BindingKind::StorageTexelBuffer`).
     TexelBuffer(&'a Buffer),
+    /// The same as RGBA32UI texels (the `brdf` layer texels, environment/layer_pair.rs).
+    UintTexelBuffer(&'a Buffer),
     AccelerationStructure(&'a AccelerationStructure),
 }
 
@@ -492,20 +494,25 @@ impl DescriptorSet {
         Ok(set)
     }
 
-    /// An RGBA32F view of the whole of `buffer`, owned by this set.
-    fn texel_view(&mut self, buffer: &Buffer) -> Result<vk::BufferView, GpuError> {
+    /// A view of the whole of `buffer` as 16-byte texels of `format` (RGBA32F or RGBA32UI),
+    /// owned by this set.
+    fn texel_view(
+        &mut self,
+        buffer: &Buffer,
+        format: vk::Format,
+    ) -> Result<vk::BufferView, GpuError> {
         let texels = buffer.size() / 16;
         let limit = self.shared.info.max_texel_buffer_elements;
         if texels > u64::from(limit) {
             return Err(GpuError::Limit {
-                what: "RGBA32F texels in one texel buffer (maxTexelBufferElements)",
+                what: "16-byte texels in one texel buffer (maxTexelBufferElements)",
                 value: texels,
                 limit: u64::from(limit),
             });
         }
         let info = vk::BufferViewCreateInfo::default()
             .buffer(buffer.raw)
-            .format(vk::Format::R32G32B32A32_SFLOAT)
+            .format(format)
             .offset(0)
             .range(vk::WHOLE_SIZE);
         // SAFETY: valid device; the buffer is live; the view is destroyed with the set.
@@ -588,7 +595,12 @@ impl DescriptorSet {
                         image_layout: vk::ImageLayout::GENERAL,
                     }],
                 )),
-                Resource::TexelBuffer(b) => infos.texel_views.push((*index, self.texel_view(b)?)),
+                Resource::TexelBuffer(b) => infos
+                    .texel_views
+                    .push((*index, self.texel_view(b, vk::Format::R32G32B32A32_SFLOAT)?)),
+                Resource::UintTexelBuffer(b) => infos
+                    .texel_views
+                    .push((*index, self.texel_view(b, vk::Format::R32G32B32A32_UINT)?)),
                 Resource::AccelerationStructure(a) => infos.structures.push((*index, [a.raw])),
             }
         }

@@ -540,7 +540,8 @@ fn an_uploaded_environment_reads_back_identical_texels_and_renders_the_same() {
 #[test]
 fn the_brdf_models_layer_texels_carry_the_seam_rule_in_their_aprons() {
     // The `brdf` model reads each face with a one-texel apron (layer_apron.comp); every texel of
-    // it, apron and face, must be the CPU twin's, bit for bit: a copy, not a computation.
+    // it, apron and face, must be the CPU twin's, bit for bit: a copy and an integer rounding
+    // (two texels to each, layer_pair.rs), nothing else.
     let gpu = validated_gpu();
     let env = GpuPrefilter::new(&gpu)
         .unwrap()
@@ -552,7 +553,7 @@ fn the_brdf_models_layer_texels_carry_the_seam_rule_in_their_aprons() {
         )
         .unwrap();
     let host = env.read_back(&gpu).unwrap();
-    let want: Vec<[f32; 4]> = host.layers.iter().flat_map(apron_texels).collect();
+    let want: Vec<[u32; 4]> = host.layers.iter().flat_map(apron_texels).collect();
     let (offsets, total) = layer_texel_offsets(env.layer_faces());
     assert_eq!(total as usize, want.len());
     assert_eq!(offsets.len(), host.layers.len());

@@ -34,6 +34,13 @@ shader_interface! {
         /// The rough split's lights are binned by direction on the cube, in cells of
         /// ENV_LIGHT_BIN_CELLS² per face (environment/light_bins.rs).
         ENV_LIGHT_BIN_CELLS: usize = 32;
+        /// The `brdf` model's layer texels are stored two to an RGBA32UI texel, each channel in
+        /// LAYER_CODE_BITS bits: an f32 less its sign and its 31 − LAYER_CODE_BITS lowest
+        /// mantissa bits, rounded to nearest even (relative error ≤ 2⁻¹⁴), so that a bilinear
+        /// lookup reads two texels, not four (shaders/common/layer_pair.glsl, its twin
+        /// environment/layer_pair.rs; measured in BENCHMARKS.md). 21 is the most that fits: the
+        /// second texel's three codes less the bits beside the first's must share one word.
+        LAYER_CODE_BITS: u32 = 21;
         /// Knots of the specular directional albedo A(nv) the `brdf` model normalises by, at
         /// nv = (k/(ALBEDO_KNOTS − 1))² (environment/brdf_quadrature.rs `albedo_knots`).
         ALBEDO_KNOTS: usize = 65;

@@ -460,7 +460,7 @@ pub(super) fn shade_set(
         ),
         (
             ENV_LAYER_TEXELS_BINDING,
-            Resource::TexelBuffer(layer_texels),
+            Resource::UintTexelBuffer(layer_texels),
         ),
     ];
     if let Some(TracedResources {
