@@ -152,10 +152,11 @@ float light_cull_cos(LacquerParams p, float spread) {
 }
 
 // One of the map's bright parts, taken out of the layers as a directional light (environment/
-// bright.rs; xyz towards it and w its spread σ², rgb its irradiance): f_spec·E·(N·l) =
-// F·D'·G·E/(4·nv) with D' the lobe widened by the spread; 0 for a light beyond `light_cull_cos`
-// of the mirror direction r (twin: brdf_quadrature.rs `bright_light`).
-vec3 bright_light(LacquerParams p, vec3 n, vec3 v, float nv, vec3 r, vec4 light, vec4 irradiance) {
+// bright.rs; xyz towards it and w its spread σ²), per unit of its irradiance E: f_spec·E·(N·l) =
+// F·D'·G·E/(4·nv) with D' the lobe widened by the spread, less the E; 0 for a light beyond
+// `light_cull_cos` of the mirror direction r (twin: brdf_quadrature.rs `bright_light`). The
+// caller multiplies by E, and reads it only where this is not 0.
+vec3 bright_light_weight(LacquerParams p, vec3 n, vec3 v, float nv, vec3 r, vec4 light) {
     vec3 l = light.xyz;
     if (dot(r, l) < light_cull_cos(p, light.w)) {
         return vec3(0.0);
@@ -175,7 +176,7 @@ vec3 bright_light(LacquerParams p, vec3 n, vec3 v, float nv, vec3 r, vec4 light,
     float d = spread_beckmann_d(p.beckmann_m, light.w, n, v, l, nh, vh, cross(n, h));
     float g = cook_torrance_g(nh, nv, nl, vh);
     vec3 f = lacquer_fresnel(p, angle_deg_of_cos(min(vh, 1.0)));
-    return f * (d * g / (4.0 * nv)) * irradiance.rgb;
+    return f * (d * g / (4.0 * nv));
 }
 
 // The bright split's lights (`env_light_*`; twin: `bright_specular`).
@@ -183,8 +184,8 @@ vec3 bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
     vec3 r = 2.0 * nv * n - v;
     vec3 sum = vec3(0.0);
     for (int i = 0; i < frame.environment.z; ++i) {
-        sum += bright_light(p, n, v, nv, r, frame.env_light_direction[i],
-            frame.env_light_irradiance[i]);
+        sum += bright_light_weight(p, n, v, nv, r, frame.env_light_direction[i])
+            * frame.env_light_irradiance[i].rgb;
     }
     return sum;
 }
@@ -194,8 +195,8 @@ vec3 rough_bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
     vec3 r = 2.0 * nv * n - v;
     vec3 sum = vec3(0.0);
     for (int i = 0; i < frame.env_rough.y; ++i) {
-        sum += bright_light(p, n, v, nv, r, frame.env_rough_light_direction[i],
-            frame.env_rough_light_irradiance[i]);
+        sum += bright_light_weight(p, n, v, nv, r, frame.env_rough_light_direction[i])
+            * frame.env_rough_light_irradiance[i].rgb;
     }
     return sum;
 }
@@ -213,7 +214,9 @@ int light_bin(vec3 d) {
 // `rough_bright_specular` for m up to frame.env_lattice_share.z, visiting only the lights listed
 // in the direction bin of the mirror direction (environment/light_bins.rs, which holds each
 // listed light's direction and irradiance): the others would add an exact 0, and the listed ones
-// are added in the same order, so the sum is the same number.
+// are added in the same order, so the sum is the same number. A light's irradiance is read only
+// where its weight is not 0: the read is a gather, and llvmpipe skips it wherever the whole block
+// of pixels culls the light (measured in BENCHMARKS.md, "Two layer texels in one").
 vec3 binned_rough_bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
     vec3 r = 2.0 * nv * n - v;
     int headers = frame.env_rough.z;
@@ -223,9 +226,10 @@ vec3 binned_rough_bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
     int count = int(bin.y);
     vec3 sum = vec3(0.0);
     for (int k = first; k < first + count; ++k) {
-        vec4 light = texelFetch(fresnel_knots, list + 2 * k);
-        vec4 irradiance = texelFetch(fresnel_knots, list + 2 * k + 1);
-        sum += bright_light(p, n, v, nv, r, light, irradiance);
+        vec3 weight = bright_light_weight(p, n, v, nv, r, texelFetch(fresnel_knots, list + 2 * k));
+        if (any(notEqual(weight, vec3(0.0)))) {
+            sum += weight * texelFetch(fresnel_knots, list + 2 * k + 1).rgb;
+        }
     }
     return sum;
 }
