@@ -1,7 +1,8 @@
 // The `brdf` model's layer texels, two horizontally adjacent texels of a face in one RGBA32UI
 // texel, each channel in LAYER_CODE_BITS bits: its f32 less the sign and the lowest mantissa
-// bits, rounded to nearest even. A bilinear lookup then reads two texels instead of four. The
-// CPU twin, whose doc has the layout, is src/environment/layer_pair.rs: change both together.
+// bits, rounded to nearest even (0 outside the normal numbers and +∞). A bilinear lookup then
+// reads two texels instead of four. The CPU twin, whose doc has the layout, is
+// src/environment/layer_pair.rs: change both together.
 //
 // The includer includes interface.glsl first.
 
@@ -14,12 +15,14 @@ const uint LAYER_LOW_BITS = 32u - uint(LAYER_CODE_BITS);
 const uint LAYER_HIGH_BITS = uint(LAYER_CODE_BITS) - LAYER_LOW_BITS;
 const uint LAYER_MAX_CODE = 0x7F7FFFFFu >> LAYER_DROPPED;
 
-// The code of each channel of x (twin: `encode`): 0 for a negative value, −0 or NaN.
+// The code of each channel of x (twin: `encode`): 0 for a negative value, −0, NaN or a value
+// below the smallest normal f32 (whose subtraction wraps).
 uvec3 layer_encode(vec3 x) {
     uvec3 bits = floatBitsToUint(x);
     uvec3 round = (1u << (LAYER_DROPPED - 1u)) - 1u + ((bits >> LAYER_DROPPED) & 1u);
     uvec3 code = min((bits + round) >> LAYER_DROPPED, uvec3(LAYER_MAX_CODE));
-    return mix(code, uvec3(0u), greaterThan(bits, uvec3(0x7F800000u)));
+    bvec3 outside = greaterThan(bits - 0x00800000u, uvec3(0x7F800000u - 0x00800000u));
+    return mix(code, uvec3(0u), outside);
 }
 
 // Texels a and b in one texel (twin: `pack`).

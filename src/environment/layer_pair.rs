@@ -5,8 +5,9 @@
 //!
 //! A channel's code is its f32 less the sign and the `31 − LAYER_CODE_BITS` lowest mantissa bits,
 //! rounded to nearest even: the same exponent range, 13 mantissa bits, relative error ≤ 2⁻¹⁴.
-//! Radiance is never negative; a negative value, −0 or NaN is stored as 0, and nothing rounds up
-//! to infinity (the largest code is the largest finite f32's).
+//! Radiance is never negative; a negative value, −0, NaN or a value below the smallest normal
+//! f32 is stored as 0 (a device may flush such a subnormal to 0 when it reads the layer), and
+//! nothing rounds up to infinity (the largest code is the largest finite f32's).
 //!
 //! The words: the first texel's codes in the low bits of x, y, z; the second's low
 //! `32 − LAYER_CODE_BITS` bits above them, and its high bits in w, red first. The GPU twin is
@@ -23,6 +24,8 @@ const LOW_BITS: u32 = 32 - LAYER_CODE_BITS;
 /// The rest of each of its codes, in w.
 const HIGH_BITS: u32 = LAYER_CODE_BITS - LOW_BITS;
 const _: () = assert!(3 * HIGH_BITS <= 32, "three high parts must share one word");
+/// The smallest positive normal f32's bits.
+const SMALLEST_NORMAL: u32 = 0x0080_0000;
 /// The largest finite f32's code (its bits 0x7F7F_FFFF; `f32::to_bits` is not const at the
 /// crate's MSRV).
 const MAX_CODE: u32 = 0x7F7F_FFFF >> DROPPED;
@@ -30,8 +33,9 @@ const MAX_CODE: u32 = 0x7F7F_FFFF >> DROPPED;
 /// The code of `x` (module doc).
 pub fn encode(x: f32) -> u32 {
     let bits = x.to_bits();
-    // Negative values and −0 have the sign bit; NaNs are above +∞.
-    if bits > f32::INFINITY.to_bits() {
+    // Below the smallest normal the subtraction wraps; negative values and −0 have the sign
+    // bit, NaNs are above +∞: all beyond the range of normal numbers and +∞.
+    if bits.wrapping_sub(SMALLEST_NORMAL) > f32::INFINITY.to_bits() - SMALLEST_NORMAL {
         return 0;
     }
     let round = (1 << (DROPPED - 1)) - 1 + ((bits >> DROPPED) & 1);
@@ -85,20 +89,31 @@ mod tests {
             }
             x *= 1.37;
         }
-        // Round to nearest even: a tie goes to the even code.
-        let halfway = f32::from_bits((1 << DROPPED) + (1 << (DROPPED - 1)));
-        assert_eq!(encode(halfway), 2);
-        let halfway_odd = f32::from_bits((2 << DROPPED) + (1 << (DROPPED - 1)));
-        assert_eq!(encode(halfway_odd), 2);
+        // Round to nearest even: a tie goes to the even code (1.0's code is even).
+        let one = 1f32.to_bits() >> DROPPED;
+        assert_eq!(one % 2, 0);
+        let tie = |code: u32| f32::from_bits((code << DROPPED) + (1 << (DROPPED - 1)));
+        assert_eq!(encode(tie(one)), one);
+        assert_eq!(encode(tie(one + 1)), one + 2);
         assert_eq!(stored(1.0), 1.0);
         assert_eq!(stored(0.0), 0.0);
     }
 
     #[test]
     fn nothing_outside_radiance_is_stored_as_anything_but_zero_or_finite() {
-        for x in [-1.0, -0.0, f32::NAN, -f32::INFINITY] {
-            assert_eq!(stored(x), 0.0, "{x}");
+        let subnormal = f32::from_bits(SMALLEST_NORMAL - 1);
+        for x in [
+            -1.0,
+            -0.0,
+            f32::NAN,
+            -f32::INFINITY,
+            subnormal,
+            f32::from_bits(1),
+        ] {
+            assert_eq!(stored(x).to_bits(), 0, "{x}");
         }
+        assert_eq!(SMALLEST_NORMAL, f32::MIN_POSITIVE.to_bits());
+        assert_eq!(stored(f32::MIN_POSITIVE), f32::MIN_POSITIVE);
         assert_eq!(MAX_CODE, f32::MAX.to_bits() >> DROPPED);
         assert_eq!(stored(f32::INFINITY), f32::from_bits(MAX_CODE << DROPPED));
         assert!(stored(f32::MAX).is_finite());

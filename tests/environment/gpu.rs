@@ -566,6 +566,69 @@ fn the_brdf_models_layer_texels_carry_the_seam_rule_in_their_aprons() {
     assert_no_validation_messages(&gpu);
 }
 
+#[test]
+fn the_layer_texels_round_every_kind_of_value_as_the_twin_does() {
+    // Two texels to a texel, each channel rounded to 21 bits by integer operations
+    // (layer_pair.glsl, twin layer_pair.rs), at the values where a rounding rule shows: ties
+    // between two codes (even and odd), the neighbours of a tie, a carry into the next binade,
+    // the largest finite f32 and the ones that would round past it, the smallest normal and the
+    // subnormals below it, zeros and negatives (stored as 0). Uploaded as the layers themselves,
+    // so every value reaches the apron pass as it is.
+    let gpu = validated_gpu();
+    let mut values: Vec<f32> = vec![
+        0.0,
+        -0.0,
+        -1.0,
+        -3e38,
+        1.0,
+        0.1,
+        65_504.0,
+        1e-30,
+        f32::MIN_POSITIVE,
+        f32::from_bits(1),
+        f32::from_bits(0x007F_FFFF),
+        f32::MAX,
+        f32::from_bits(0x7F7F_FDFF),
+        f32::from_bits(0x7F7F_FE00),
+        // A mantissa whose kept bits are all ones, at and past half a code: carries.
+        f32::from_bits(0x3FFF_FE00),
+        f32::from_bits(0x3FFF_FDFF),
+    ];
+    for code in [1u32, 2, 3, 0x1234, 0x1F_DFFE] {
+        let base = code << 10;
+        values.extend([0x1FF, 0x200, 0x201].map(|low| f32::from_bits(base | low)));
+    }
+    let n = values.len();
+    let cube = |shift: usize| {
+        let mut cube = CubeImage::new(16);
+        for (k, texel) in cube.texels.iter_mut().enumerate() {
+            let at = |step: usize| values[(k * step + shift) % n];
+            *texel = [at(1), at(7), at(13), 1.0];
+        }
+        cube
+    };
+    let env = shikki::environment::PrefilteredEnvironment {
+        betas: vec![0.0, 0.5],
+        layers: vec![cube(0), cube(5)],
+        irradiance: CubeImage::new(1),
+    };
+    let on_gpu = GpuEnvironment::upload(&gpu, &env).unwrap();
+    let got = on_gpu
+        .read_layer_texels(&gpu, &LayerApronPass::new(&gpu).unwrap())
+        .unwrap();
+    let want: Vec<[u32; 4]> = env.layers.iter().flat_map(apron_texels).collect();
+    assert_eq!(got.len(), want.len());
+    let wrong: Vec<_> = got.iter().zip(&want).filter(|(g, w)| g != w).collect();
+    assert!(
+        wrong.is_empty(),
+        "{} of {} texels differ, first {:x?}",
+        wrong.len(),
+        want.len(),
+        wrong.first()
+    );
+    assert_no_validation_messages(&gpu);
+}
+
 /// A map whose every pixel differs from its neighbours by a large random factor (1 … 1000), so a
 /// sub-sample that reads the wrong source pixel shows.
 fn hashed_equirect(width: u32, height: u32) -> Equirect {
