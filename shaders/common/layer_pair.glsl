@@ -13,6 +13,8 @@ const uint LAYER_DROPPED = 31u - uint(LAYER_CODE_BITS);
 const uint LAYER_CODE_MASK = (1u << uint(LAYER_CODE_BITS)) - 1u;
 const uint LAYER_LOW_BITS = 32u - uint(LAYER_CODE_BITS);
 const uint LAYER_HIGH_BITS = uint(LAYER_CODE_BITS) - LAYER_LOW_BITS;
+// The smallest positive normal f32's bits, and the largest finite f32's code.
+const uint LAYER_SMALLEST_NORMAL = 0x00800000u;
 const uint LAYER_MAX_CODE = 0x7F7FFFFFu >> LAYER_DROPPED;
 
 // The code of each channel of x (twin: `encode`): 0 for a negative value, −0, NaN or a value
@@ -21,7 +23,8 @@ uvec3 layer_encode(vec3 x) {
     uvec3 bits = floatBitsToUint(x);
     uvec3 round = (1u << (LAYER_DROPPED - 1u)) - 1u + ((bits >> LAYER_DROPPED) & 1u);
     uvec3 code = min((bits + round) >> LAYER_DROPPED, uvec3(LAYER_MAX_CODE));
-    bvec3 outside = greaterThan(bits - 0x00800000u, uvec3(0x7F800000u - 0x00800000u));
+    bvec3 outside = greaterThan(bits - LAYER_SMALLEST_NORMAL,
+        uvec3(0x7F800000u - LAYER_SMALLEST_NORMAL));
     return mix(code, uvec3(0u), outside);
 }
 

@@ -787,8 +787,9 @@ mod tests {
             worst = worst.max((got - want).abs());
         }
         // Measured 0.0154: bilinear interpolation's curvature error on 32² faces (texels ~0.05
-        // rad); the stored texels' rounding adds at most 5.5·2⁻¹⁴ ≈ 3e-4. A tap from the wrong texel at an edge costs up to a texel's step of the field,
-        // ≈ √6·0.05 ≈ 0.12, so 0.03 would catch it.
+        // rad); the stored texels' rounding adds at most 5.5·2⁻¹⁴ ≈ 3e-4. A tap from the wrong
+        // texel at an edge costs up to a texel's step of the field, ≈ √6·0.05 ≈ 0.12, so 0.03
+        // would catch it.
         assert!(worst < 0.03, "{worst}");
     }
 
