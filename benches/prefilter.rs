@@ -73,7 +73,7 @@ fn bench(
         beta_min: 0.02,
         beta_max: 1.0,
         layer_texel: 1.0,
-        fine_layer: false,
+        fine_layers: 0,
     };
     let mut gpu_times = Vec::new();
     let mut cpu_seconds = Vec::new();

@@ -64,39 +64,38 @@ void layer_pair(float beta, out int k0, out float t) {
 }
 
 // The `brdf` model's layer pair for a lookup at β (up to 1,024 a pixel, where `layer_pair`'s
-// run over the layers was a quarter of the time): above layer g the layers' β are a geometric run
-// (frame.layer_run; g = 2 after a fine layer), so the pair is where ln β falls on it. At a
-// boundary rounding may give the neighbouring pair with t at 1 or 0 instead, the same blend.
-// Where the layers are not such a run (never, from PrefilterParams) the pair is `layer_pair`'s.
-// The blend is in variance, (1 − t)·β_k² + t·β_(k+1)² = β², with layer 0's β_0² its texels' read
-// variance (twin: brdf_quadrature.rs `layered_radiance`, whose doc says why). The `paper`
-// model's one lookup a pixel keeps `layer_pair`, so its images stay what they were.
+// run over the layers was a quarter of the time): from layer 1 the layers' β are a geometric run
+// (frame.layer_run; the `brdf` model's fine layers continue it below β_min), so the pair is where
+// ln β falls on it. At a boundary rounding may give the neighbouring pair with t at 1 or 0
+// instead, the same blend. Where the layers are not such a run (never, from PrefilterParams) the
+// pair is `layer_pair`'s. The blend is in variance, (1 − t)·β_k² + t·β_(k+1)² = β², with layer
+// 0's β_0² its texels' read variance (twin: brdf_quadrature.rs `layered_radiance`, whose doc says
+// why). The `paper` model's one lookup a pixel keeps `layer_pair`, so its images stay what they
+// were.
 void layer_pair_of_run(float beta, out int k0, out float t) {
     vec4 run = frame.layer_run;
-    float beta1 = layer_beta(1);
     float beta2 = beta * beta;
     float e0 = frame.layer_variance.x;
-    if (run.w == 0.0) {
+    if (run.z == 0.0) {
         layer_pair(beta, k0, t);
         float lo = k0 == 0 ? e0 : layer_beta(k0) * layer_beta(k0);
         float hi = layer_beta(min(k0 + 1, ENV_LAYER_COUNT - 1));
         t = t > 0.0 ? (beta2 - lo) / max(hi * hi - lo, 1e-30) : 0.0;
     } else {
         int count = ENV_LAYER_COUNT;
-        float log_beta = log(beta);
-        float x = (log_beta - run.y) * run.z;
+        float x = (log(beta) - run.x) * run.y;
         float whole = floor(x);
-        int k = int(run.x) + int(whole);
+        int k = 1 + int(whole);
         bool past = k >= count - 1;
         k0 = past ? count - 1 : k;
-        // On the run (β_(k+1)/β_k)² − 1 = frame.layer_variance.y and β/β_k = e^((x − whole)/run.z).
-        t = past ? 0.0 : (exp(2.0 * (x - whole) / run.z) - 1.0) / frame.layer_variance.y;
-        // Below the run: between layer 1 and layer g = 2 (the fine layer), or below layer 1.
+        // On the run (β_(k+1)/β_k)² − 1 = frame.layer_variance.y and β/β_k = e^((x − whole)/run.y).
+        t = past ? 0.0 : (exp(2.0 * (x - whole) / run.y) - 1.0) / frame.layer_variance.y;
+        // Below the run: between the sharp layer 0 and layer 1.
         bool below = x < 0.0;
+        float beta1 = layer_beta(1);
         float under_1 = clamp((beta2 - e0) / max(beta1 * beta1 - e0, 1e-30), 0.0, 1.0);
-        float under_g = (beta2 - beta1 * beta1) / (frame.layer_variance.z - beta1 * beta1);
-        k0 = below ? (beta < beta1 ? 0 : 1) : k0;
-        t = below ? (beta < beta1 ? under_1 : under_g) : t;
+        k0 = below ? 0 : k0;
+        t = below ? under_1 : t;
     }
     k0 = beta > 0.0 ? k0 : 0;
     t = beta > 0.0 ? clamp(t, 0.0, 1.0) : 0.0;
@@ -116,8 +115,8 @@ vec3 prefiltered_radiance(vec3 dir, float beta) {
     float t;
     layer_pair(beta, k0, t);
     vec3 sum = vec3(0.0);
-#if MAX_ENV_LAYERS != 16
-#error "prefiltered_radiance adds layers 0..15: list one ADD_LAYER per layer below"
+#if MAX_ENV_LAYERS != 20
+#error "prefiltered_radiance adds layers 0..19: list one ADD_LAYER per layer below"
 #endif
 #define ADD_LAYER(K)                                                            \
     if (K < ENV_LAYER_COUNT) {                                                  \
@@ -130,6 +129,7 @@ vec3 prefiltered_radiance(vec3 dir, float beta) {
     ADD_LAYER(4) ADD_LAYER(5) ADD_LAYER(6) ADD_LAYER(7)
     ADD_LAYER(8) ADD_LAYER(9) ADD_LAYER(10) ADD_LAYER(11)
     ADD_LAYER(12) ADD_LAYER(13) ADD_LAYER(14) ADD_LAYER(15)
+    ADD_LAYER(16) ADD_LAYER(17) ADD_LAYER(18) ADD_LAYER(19)
 #undef ADD_LAYER
     return sum;
 }

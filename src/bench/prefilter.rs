@@ -50,7 +50,7 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<PrefilterBench> {
         beta_min: 0.02,
         beta_max: 1.0,
         layer_texel: 1.0,
-        fine_layer: false,
+        fine_layers: 0,
     };
     params.validate()?;
     let prefilter = GpuPrefilter::new(gpu)?;

@@ -28,7 +28,7 @@ const MAGIC: &[u8; 8] = b"SHKENV\r\n";
 const FORMAT_VERSION: u32 = 1;
 /// magic, version, key (32), payload length (8), payload SHA-256 (32).
 const HEADER_BYTES: usize = 8 + 4 + 32 + 8 + 32;
-/// Larger files are not read: face 4096 with 16 layers is far below this, a hostile or damaged
+/// Larger files are not read: face 4096 with 20 layers is far below this, a hostile or damaged
 /// file cannot make us allocate more.
 const MAX_FILE_BYTES: u64 = 4 << 30;
 const EXTENSION: &str = "shkenv";
@@ -54,7 +54,7 @@ impl CacheKey {
         hash.update(bytemuck::cast_slice::<[f32; 3], u8>(&source.pixels));
         hash.update(params.face_size.to_le_bytes());
         hash.update(params.layers.to_le_bytes());
-        hash.update([u8::from(params.fine_layer)]);
+        hash.update(params.fine_layers.to_le_bytes());
         for x in [
             params.beta_min,
             params.beta_max,
@@ -308,7 +308,7 @@ mod tests {
             beta_min: 0.5,
             beta_max: 1.0,
             layer_texel: 1.0,
-            fine_layer: false,
+            fine_layers: 0,
         };
         let source = Equirect::constant(4, 2, [1.0, 0.5, 0.25]);
         let key = CacheKey::new(&source, &params, EnvironmentLight::default());
@@ -357,11 +357,11 @@ mod tests {
             ..params
         };
         assert_ne!(key, CacheKey::new(&source, &finer_layers, light(1.0, 0.0)));
-        let fine_layer = PrefilterParams {
-            fine_layer: true,
+        let fine_layers = PrefilterParams {
+            fine_layers: 1,
             ..params
         };
-        assert_ne!(key, CacheKey::new(&source, &fine_layer, light(1.0, 0.0)));
+        assert_ne!(key, CacheKey::new(&source, &fine_layers, light(1.0, 0.0)));
     }
 
     #[test]

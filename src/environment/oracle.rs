@@ -394,7 +394,7 @@ mod tests {
             beta_min: 0.02,
             beta_max: 1.0,
             layer_texel: 1.0,
-            fine_layer: false,
+            fine_layers: 0,
         };
         let env = prefilter_cpu(
             &Equirect::constant(64, 32, c),
@@ -637,7 +637,7 @@ mod tests {
             beta_min: 0.5,
             beta_max: 0.5,
             layer_texel: 1.0,
-            fine_layer: false,
+            fine_layers: 0,
         };
         assert!(prefilter_cpu(&src, &good, EnvironmentLight::new(f64::NAN, 0.0)).is_err());
         assert!(prefilter_cpu(&src, &good, EnvironmentLight::new(-1.0, 0.0)).is_err());

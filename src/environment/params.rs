@@ -63,9 +63,10 @@ pub struct PrefilterParams {
     /// The widest a blurred layer's texel, (π/2)/M, may be as a share of the layer's β
     /// ([`layer_face_size`]): 1 for SPEC's `paper` layers, [`BRDF_LAYER_TEXEL`] for `brdf`'s.
     pub layer_texel: f64,
-    /// One more layer, at β_min/2, between the sharp layer 0 and β_min (the `brdf` model's:
-    /// [`BRDF_FINE_LAYER`]); false for SPEC's series.
-    pub fine_layer: bool,
+    /// Layers between the sharp layer 0 and β_min: the series continued below β_min at its own
+    /// ratio, β_min/r, β_min/r², … (the `brdf` model's [`BRDF_FINE_LAYERS`]); 0 for SPEC's
+    /// series.
+    pub fine_layers: u32,
 }
 
 /// [`PrefilterParams::layer_texel`] of the `brdf` model's layers: two thirds of β, so at least
@@ -76,17 +77,24 @@ pub struct PrefilterParams {
 /// from 2.45 to 5.75 s (BENCHMARKS.md, "Layers that resolve the lattice's blur").
 pub const BRDF_LAYER_TEXEL: f64 = 2.0 / 3.0;
 
-/// Whether the `brdf` model's layers have [`PrefilterParams::fine_layer`]. Its lookups narrower
-/// than β_min (the lattice across the plane of incidence at m ≤ 0.03, or towards grazing) blend
-/// layer 0 with the next; with the next at β_min = 0.02 a lookup at 0.01 was half a point read,
-/// not a blur, and a board at 25° under the studio at m = 0.02 was 19 % off (relative RMSE).
-/// Blurring layer 0 instead fails the lookups narrower still, at grazing, which need the sharp
-/// map (BENCHMARKS.md, "m = 0.02: the lookups between the sharp layer and the first blurred one").
-pub const BRDF_FINE_LAYER: bool = true;
+/// The `brdf` model's [`PrefilterParams::fine_layers`]. Its lookups narrower than β_min (the
+/// lattice across the plane of incidence at m ≤ 0.03, or towards grazing) blend the layers
+/// below it, and a blend of two blurs is a blur of the blended variance but not of a Gaussian's
+/// shape: its tails are the wider layer's, and a dark point beside a bright edge is all tails.
+/// One layer at β_min/2 (until 2026-12-05) left ratios of 2 and ~3 between the sharp layer, it
+/// and β_min; three layers on the series' own ratio took the courtyard's 112 points at m = 0.02
+/// from 1.05 to 0.74 % mean and the studio's from 1.40 to 1.20 % (BENCHMARKS.md, "The series
+/// continued below β_min"). A fourth, at 0.0065, is coarser than its face of 256 can hold and
+/// gave nothing.
+pub const BRDF_FINE_LAYERS: u32 = 3;
 
 /// The `brdf` model's widest layer: with the fine layer the series from β_min has one step fewer,
 /// and this keeps its ratio (×1.32 per layer, [`PrefilterParams::for_model`]).
 pub const BRDF_BETA_MAX: f64 = 0.76;
+
+/// The `brdf` model's layer count: the sharp map, [`BRDF_FINE_LAYERS`], then β_min …
+/// [`BRDF_BETA_MAX`] in 13 steps of ×1.32.
+pub const BRDF_LAYERS: u32 = 1 + BRDF_FINE_LAYERS + 14;
 
 impl PrefilterParams {
     /// SPEC defaults (K = 8, β 0.02 … 1.0) with the face size chosen from the source width.
@@ -97,24 +105,24 @@ impl PrefilterParams {
             beta_min: 0.02,
             beta_max: 1.0,
             layer_texel: 1.0,
-            fine_layer: false,
+            fine_layers: 0,
         }
     }
 
     /// [`for_source_width`](Self::for_source_width) for the environment model that draws with
     /// the layers: SPEC §4's K = 8 for `paper`; for `brdf`, whose lookups read the layer whose
-    /// blur matches each node's or sample's, `BRDF_LAYERS` at [`BRDF_LAYER_TEXEL`]: the sharp
-    /// map, the fine layer at β_min/2 ([`BRDF_FINE_LAYER`]), then β_min … [`BRDF_BETA_MAX`] in
-    /// steps of ×1.32 instead of ×1.92 (the blend of two layers is further from the blur between
-    /// them the further apart they are; BENCHMARKS.md, "The `brdf` environment model").
+    /// blur matches each node's or sample's, [`BRDF_LAYERS`] at [`BRDF_LAYER_TEXEL`]: the sharp
+    /// map, then the series of ×1.32 instead of ×1.92 (the blend of two layers is further from
+    /// the blur between them the further apart they are; BENCHMARKS.md, "The `brdf` environment
+    /// model") from [`BRDF_FINE_LAYERS`] steps below β_min up to [`BRDF_BETA_MAX`].
     pub fn for_model(width: u32, model: EnvironmentModel) -> Self {
         let paper = Self::for_source_width(width);
         match model {
             EnvironmentModel::Paper => paper,
             EnvironmentModel::Brdf => Self {
-                layers: crate::environment::brdf_quadrature::BRDF_LAYERS,
+                layers: BRDF_LAYERS,
                 layer_texel: BRDF_LAYER_TEXEL,
-                fine_layer: BRDF_FINE_LAYER,
+                fine_layers: BRDF_FINE_LAYERS,
                 beta_max: BRDF_BETA_MAX,
                 ..paper
             },
@@ -151,6 +159,16 @@ impl PrefilterParams {
                 "must be in [0.25, 1] (a blurred layer's texel as a share of its β)",
             ));
         }
+        if self.fine_layers + 2 > self.layers {
+            return Err(Error::invalid(
+                "fine_layers",
+                self.fine_layers,
+                format!(
+                    "must leave β_min a layer: at most K − 2 = {}",
+                    self.layers.saturating_sub(2)
+                ),
+            ));
+        }
         if self.beta_max < self.beta_min {
             return Err(Error::invalid(
                 "beta_max",
@@ -162,20 +180,18 @@ impl PrefilterParams {
     }
 
     /// β_k of SPEC §4: β_0 = 0; β_k = β_min·(β_max/β_min)^((k-1)/(K-2)) for k ≥ 1 (K = 2: β_1 = β_min).
-    /// With [`fine_layer`](Self::fine_layer), β_1 = β_min/2 and the series from β_min starts at
-    /// k = 2: β_k = β_min·(β_max/β_min)^((k-2)/(K-3)).
+    /// With F [`fine_layers`](Self::fine_layers), β_min is layer F + 1 and the series runs from
+    /// layer 1 at its own ratio r = (β_max/β_min)^(1/(K−2−F)): β_k = β_min·r^(k−1−F).
     pub fn beta(&self, k: u32) -> f64 {
         if k == 0 {
             return 0.0;
         }
-        let first = 1 + u32::from(self.fine_layer);
-        if k < first {
-            return 0.5 * self.beta_min;
-        }
+        let first = 1 + self.fine_layers;
         if self.layers <= first + 1 {
-            return self.beta_min;
+            return self.beta_min * 0.5f64.powi(first as i32 - k as i32);
         }
-        let t = f64::from(k - first) / f64::from(self.layers - 1 - first);
+        let steps = f64::from(self.layers - 1 - first);
+        let t = (f64::from(k) - f64::from(first)) / steps;
         self.beta_min * (self.beta_max / self.beta_min).powf(t)
     }
 
@@ -416,7 +432,7 @@ mod tests {
             beta_min: 0.02,
             beta_max: 1.0,
             layer_texel: 1.0,
-            fine_layer: false,
+            fine_layers: 0,
         };
         let faces: Vec<u32> = p.plan().iter().map(|l| l.face_size).collect();
         // π/2/0.02 = 78.5 → 128; β_2 = 0.0384 → 40.9 → 64; … β_5 = 0.27 → 5.8 → 8 → clamped to 16.
@@ -428,30 +444,60 @@ mod tests {
     fn brdf_layers_have_a_texel_of_two_thirds_of_beta() {
         let p = PrefilterParams::for_model(1024, EnvironmentModel::Brdf);
         let faces: Vec<u32> = p.plan().iter().map(|l| l.face_size).collect();
-        // The fine layer β_1 = 0.01, then β_k = 0.02·38^((k−2)/13); M ≥ 1.5·(π/2)/β_k: β_1
-        // 235.6 → 256, β_2 117.8 → 128, β_3 = 0.0265 → 89.1 → 128, β_4 = 0.0350 → 67.3 → 128,
-        // β_5 = 0.0463 → 50.9 → 64, … β_10 = 0.188 → 12.6 → 16.
+        // β_k = 0.02·38^((k−4)/13); M ≥ 1.5·(π/2)/β_k: the fine layers β_1..3 = 0.0086, 0.0114,
+        // 0.0151 → 273, 206, 156 → 512, 256, 256, each clamped to N = 256; β_4 = 0.02 → 117.8 →
+        // 128, β_5 = 0.0265 → 89.1 → 128, β_6 = 0.0350 → 67.3 → 128, β_7 = 0.0463 → 50.9 → 64,
+        // … β_12 = 0.188 → 12.6 → 16.
         assert_eq!(
             faces,
-            vec![256, 256, 128, 128, 128, 64, 64, 32, 32, 32, 16, 16, 16, 16, 16, 16]
+            vec![256, 256, 256, 256, 128, 128, 128, 64, 64, 32, 32, 32, 16, 16, 16, 16, 16, 16]
         );
         let paper = PrefilterParams::for_model(1024, EnvironmentModel::Paper);
         assert_eq!(paper, PrefilterParams::for_source_width(1024));
     }
 
     #[test]
-    fn the_fine_layer_sits_at_half_of_beta_min_before_the_series() {
+    fn the_fine_layers_continue_the_series_below_beta_min() {
         let p = PrefilterParams::for_model(1024, EnvironmentModel::Brdf);
+        assert_eq!(p.layers, 18);
         assert_eq!(p.beta(0), 0.0);
-        assert!((p.beta(1) - 0.01).abs() < 1e-15);
-        assert!((p.beta(2) - 0.02).abs() < 1e-15);
-        assert!((p.beta(15) - BRDF_BETA_MAX).abs() < 1e-12);
-        // The series' ratio is SPEC's K = 16 one's, 50^(1/14), within 0.1 %.
-        let ratio = p.beta(3) / p.beta(2);
+        let first = 1 + BRDF_FINE_LAYERS;
+        assert!((p.beta(first) - 0.02).abs() < 1e-15);
+        assert!((p.beta(17) - BRDF_BETA_MAX).abs() < 1e-12);
+        // One ratio from layer 1 to the last, (0.76/0.02)^(1/13) = 1.322884 by hand, so the
+        // shaders' `layer_pair_of_run` finds every pair on the run.
+        for k in 1..17 {
+            let ratio = p.beta(k + 1) / p.beta(k);
+            assert!((ratio - 1.322_884).abs() < 1e-6, "layer {k}: {ratio}");
+        }
+        // The ratio of SPEC's K = 16 series, 50^(1/14), within 0.1 %.
+        let ratio = p.beta(first + 1) / p.beta(first);
         assert!(
             (ratio / 50f64.powf(1.0 / 14.0) - 1.0).abs() < 1e-3,
             "{ratio}"
         );
+    }
+
+    #[test]
+    fn fine_layers_must_leave_beta_min_a_layer() {
+        let p = PrefilterParams {
+            layers: 4,
+            fine_layers: 3,
+            ..PrefilterParams::for_source_width(1024)
+        };
+        let message = p.validate().unwrap_err().to_string();
+        assert!(
+            message.contains("fine_layers") && message.contains("K − 2 = 2"),
+            "{message}"
+        );
+        let p = PrefilterParams {
+            fine_layers: 2,
+            ..p
+        };
+        p.validate().unwrap();
+        // β_min is layer 3, the last: the fine layers halve below it.
+        assert_eq!(p.beta(3), 0.02);
+        assert_eq!(p.beta(1), 0.005);
     }
 
     #[test]
@@ -483,7 +529,7 @@ mod tests {
             .contains("power of two"));
         p.face_size = 256;
         p.layers = 1;
-        assert!(p.validate().unwrap_err().to_string().contains("2..=16"));
+        assert!(p.validate().unwrap_err().to_string().contains("2..=20"));
         p.layers = 8;
         p.beta_min = f64::NAN;
         assert!(p.validate().is_err());

@@ -36,7 +36,7 @@ fn small_params(face_size: u32) -> PrefilterParams {
         beta_min: 0.02,
         beta_max: 1.0,
         layer_texel: 1.0,
-        fine_layer: false,
+        fine_layers: 0,
     }
 }
 
@@ -711,7 +711,7 @@ fn step_one_reads_exactly_the_oracles_source_pixels() {
             beta_min: 1.0,
             beta_max: 1.0,
             layer_texel: 1.0,
-            fine_layer: false,
+            fine_layers: 0,
         };
         let env = prefilter
             .run(&gpu, &source, &params, EnvironmentLight::new(1.0, rotation))

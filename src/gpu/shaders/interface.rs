@@ -16,7 +16,7 @@ shader_interface! {
         /// The most punctual lights one draw takes (the length of `Frame::light_vector`).
         MAX_LIGHTS: usize = 16;
         /// The most environment layers K a prefilter makes and a draw samples.
-        MAX_ENV_LAYERS: usize = 16;
+        MAX_ENV_LAYERS: usize = 20;
         /// The most bright parts of a map the `brdf` model takes out as directional lights
         /// (environment/bright.rs; `Frame::env_light_direction`).
         MAX_ENV_LIGHTS: usize = 16;
@@ -231,16 +231,16 @@ shader_interface! {
             /// (the `brdf` model's lookups), four per ivec4.
             layer_face_size: [ivec4; MAX_ENV_LAYERS / 4],
             layer_first_texel: [ivec4; MAX_ENV_LAYERS / 4],
-            /// The layers' geometric run (SPEC §4: β_k = β_min·(β_max/β_min)^(…) from layer g on;
-            /// g = 2 after a fine layer): x = g, y = ln β_g, z = 1/Δ with Δ the run's step in ln β,
-            /// w = 1 where the β above are that run (raster/draw/frame.rs `geometric_run`), 0
-            /// otherwise. The `brdf` model's lookups find their layers from it without a search
+            /// The layers' geometric run (SPEC §4: β_k = β_min·(β_max/β_min)^(…) from layer 1 on;
+            /// the `brdf` model's fine layers continue it below β_min): x = ln β_1, y = 1/Δ with Δ
+            /// the run's step in ln β, z = 1 where the β above are that run (raster/draw/frame.rs
+            /// `geometric_run`), 0 otherwise; w unused. The `brdf` model's lookups find their layers from it without a search
             /// (frame.glsl `layer_pair_of_run`).
             layer_run: vec4,
             /// What the `brdf` model's blend in variance needs of the layers, packed once a draw
             /// (frame.rs `set_environment_layers`): x = layer 0's variance, its texels' read
             /// (params.rs `texel_read_variance`); y = e^(2Δ) − 1, the run's ratio of variances
-            /// between neighbours less one; z = β_g², the run's first variance; w unused.
+            /// between neighbours less one; z, w unused.
             layer_variance: vec4,
             /// The camera basis (world), for the background's primary rays; `camera_back` is the
             /// negated view direction.

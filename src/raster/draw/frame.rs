@@ -108,24 +108,20 @@ fn pack_light(light: &BrightLight) -> ([f32; 4], [f32; 4]) {
     )
 }
 
-/// The layers' geometric run as the shader's `layer_pair_of_run` reads it: (g, ln β_g, Δ), g the
-/// first layer (1, or 2 after a fine layer) from which ln β_k = ln β_g + (k − g)·Δ to the last,
-/// within 1e-5 (the f32 β the shader compares against: its `layer_pair` finds the same pair up
-/// to rounding at a boundary, where either pair gives the same blend). `None` with fewer than two
-/// layers in the run, or none: the shader then searches (`layer_pair`).
-fn geometric_run(betas: &[f64]) -> Option<(usize, f64, f64)> {
+/// The layers' geometric run as the shader's `layer_pair_of_run` reads it: (ln β_1, Δ) where
+/// ln β_k = ln β_1 + (k − 1)·Δ from layer 1 to the last, within 1e-5 (the f32 β the shader
+/// compares against: its `layer_pair` finds the same pair up to rounding at a boundary, where
+/// either pair gives the same blend). `None` with fewer than two layers in the run, or none: the
+/// shader then searches (`layer_pair`).
+fn geometric_run(betas: &[f64]) -> Option<(f64, f64)> {
     let logs: Vec<f64> = betas.iter().map(|&b| f64::from(b as f32).ln()).collect();
     let last = logs.len().checked_sub(1)?;
-    (1..=2).find_map(|g| {
-        if last <= g || !betas[g..].iter().all(|&b| b > 0.0) {
-            return None;
-        }
-        let step = (logs[last] - logs[g]) / (last - g) as f64;
-        let on_run =
-            (g..=last).all(|k| (logs[k] - (logs[g] + (k - g) as f64 * step)).abs() <= 1e-5);
-        (step > 0.0 && on_run && (g == 1 || (betas[1] > 0.0 && betas[1] < betas[2])))
-            .then_some((g, logs[g], step))
-    })
+    if last <= 1 || !betas[1..].iter().all(|&b| b > 0.0) {
+        return None;
+    }
+    let step = (logs[last] - logs[1]) / (last - 1) as f64;
+    let on_run = (1..=last).all(|k| (logs[k] - (logs[1] + (k - 1) as f64 * step)).abs() <= 1e-5);
+    (step > 0.0 && on_run).then_some((logs[1], step))
 }
 
 impl Frame {
@@ -146,15 +142,12 @@ impl Frame {
         }
         let run = geometric_run(&betas[..betas.len().min(MAX_ENV_LAYERS)]);
         self.layer_run = match run {
-            Some((g, log_beta, step)) => [g as f32, log_beta as f32, (1.0 / step) as f32, 1.0],
+            Some((log_beta, step)) => [log_beta as f32, (1.0 / step) as f32, 1.0, 0.0],
             None => [0.0; 4],
         };
-        let (ratio, first) = match run {
-            Some((_, log_beta, step)) => ((2.0 * step).exp() - 1.0, (2.0 * log_beta).exp()),
-            None => (0.0, 0.0),
-        };
+        let ratio = run.map_or(0.0, |(_, step)| (2.0 * step).exp() - 1.0);
         let read = faces.first().map_or(0.0, |&face| texel_read_variance(face));
-        self.layer_variance = [read as f32, ratio as f32, first as f32, 0.0];
+        self.layer_variance = [read as f32, ratio as f32, 0.0, 0.0];
     }
 
     /// Packs the `brdf` model's quadrature constants (the lattice's and the grid's and their
@@ -527,28 +520,30 @@ mod tests {
         );
     }
 
-    /// SPEC's series is a geometric run from layer 1; the `brdf` model's from layer 2, after its
-    /// fine layer; a series that is not one (above layer 2) has none, and the shader searches.
+    /// SPEC's series and the `brdf` model's (its fine layers continue it below β_min) are
+    /// geometric runs from layer 1; a series that is not one has none, and the shader searches.
     #[test]
     fn geometric_run_of_the_prefilters_layers() {
         use crate::environment::{EnvironmentModel, PrefilterParams};
         let betas = |p: PrefilterParams| (0..p.layers).map(|k| p.beta(k)).collect::<Vec<_>>();
         let run = geometric_run;
         let paper = betas(PrefilterParams::for_model(1024, EnvironmentModel::Paper));
-        let (g, log, step) = run(&paper).unwrap();
-        assert_eq!(g, 1);
+        let (log, step) = run(&paper).unwrap();
         assert!((log - f64::from(paper[1] as f32).ln()).abs() < 1e-12);
         assert!((step - 50f64.ln() / 6.0).abs() < 1e-6, "{step}");
         let brdf = betas(PrefilterParams::for_model(1024, EnvironmentModel::Brdf));
-        let (g, _, step) = run(&brdf).unwrap();
-        assert_eq!(g, 2);
+        let (log, step) = run(&brdf).unwrap();
+        assert!((log - f64::from(brdf[1] as f32).ln()).abs() < 1e-12);
         assert!((step - (brdf[3] / brdf[2]).ln()).abs() < 1e-6);
         assert_eq!(run(&[0.0, 0.1, 0.2, 0.5, 0.6]), None);
+        // A series that doubles from layer 2 on but not from layer 1 (the old fine layer at
+        // β_min/2 before a ×1.32 series would be one): none.
+        assert_eq!(run(&[0.0, 0.05, 0.2, 0.4, 0.8]), None);
         assert_eq!(run(&[0.0, 0.1]), None);
     }
 
-    /// The blend in variance's constants, packed once a draw: layer 0's read variance, the run's
-    /// ratio of neighbouring variances less one and its first variance (f32: 1e-6 relative).
+    /// The blend in variance's constants, packed once a draw: layer 0's read variance and the
+    /// run's ratio of neighbouring variances less one (f32: 1e-6 relative).
     #[test]
     fn layer_variance_of_the_brdf_layers() {
         use crate::environment::{EnvironmentModel, PrefilterParams};
@@ -558,10 +553,9 @@ mod tests {
         let faces: Vec<u32> = plan.iter().map(|l| l.face_size).collect();
         let mut frame = Frame::zeroed();
         frame.set_environment_layers(&betas, &faces);
-        let [read, ratio, first, _] = frame.layer_variance.map(f64::from);
+        let [read, ratio, ..] = frame.layer_variance.map(f64::from);
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * b.abs();
         assert!(close(read, texel_read_variance(faces[0])), "{read}");
-        assert!(close(ratio, (betas[3] / betas[2]).powi(2) - 1.0), "{ratio}");
-        assert!(close(first, betas[2] * betas[2]), "{first}");
+        assert!(close(ratio, (betas[2] / betas[1]).powi(2) - 1.0), "{ratio}");
     }
 }
