@@ -5,7 +5,7 @@
 // Three quadratures of the lookups, picked (or two blended) by the material's m: for a narrow
 // lobe (m ≤ 0.06) a lattice of nodes on the plane of incidence, each read at the blur that gives
 // the lobe's width across the plane (`specular_lattice`: three lookups near normal incidence, up
-// to 25 at grazing); for a middling one (0.07 ≤ m ≤ 0.22, the rough preset) a grid of slopes
+// to 49 at grazing); for a middling one (0.07 ≤ m ≤ 0.22, the rough preset) a grid of slopes
 // from the lobe's Gaussian less the lookups' blur (`specular_grid`, ~100 lookups); for a wide one
 // (m ≥ 0.3) `samples` half vectors from a Fibonacci lattice in the Beckmann
 // lobe, in a frame whose first axis lies in the plane of incidence; each reflected direction s

@@ -208,9 +208,11 @@ impl LookupSums {
 /// Measured in BENCHMARKS.md ("The `brdf` environment model"); packed into `Frame::env_lattice`
 /// and `env_lattice_share` for the shaders.
 /// t = 1 keeps the default scene within the issue's ≤ 1.5× `paper`; t = 0.93, spacing 1.7, reach
-/// 3.0 is a third more accurate on a sphere and costs ~1.6× (BENCHMARKS.md). At most 12 nodes a
-/// side (16 before `LATTICE_MAX_STEP`): the three nodes face-on cost what the grazing ones gave
-/// back, and the 112 points' means moved by ≤ 0.11 % (BENCHMARKS.md). The reach was 2.5 σ: the
+/// 3.0 is a third more accurate on a sphere and costs ~1.6× (BENCHMARKS.md). At most 24 nodes a
+/// side: with fewer, the step is held at reach/`LATTICE_MAX_HALF` below nv = 3/(2·max), each
+/// lookup blurred that much wider than the lobe across the plane, and at 12 the studio's point
+/// at nv = 0.054 read +55 % at m = 0.05 (+7 % at 24; the 112 points' mean 1.33 → 0.90 %). Only
+/// grazing pixels pay (BENCHMARKS.md, "The series continued below β_min"). The reach was 2.5 σ: the
 /// taper then starts at 2σ, and the ratio estimator gives the lobe's tails beyond it the core's
 /// radiance. With lookups at exactly the blur they ask for (a brute-force Gaussian over the map's
 /// pixels, an experiment), the courtyard's 112 points at m = 0.02 were 1.64 % off on average at
@@ -222,7 +224,7 @@ impl LookupSums {
 pub const LATTICE_BLUR_SHARE: f64 = 1.0;
 pub const LATTICE_SPACING: f64 = 2.0;
 pub const LATTICE_REACH: f64 = 3.0;
-pub const LATTICE_MAX_HALF: u32 = 12;
+pub const LATTICE_MAX_HALF: u32 = 24;
 /// The widest node step, in standard deviations σ_p of the nodes' distribution. Towards normal
 /// incidence the blur's step (2·nv·σ) outgrows σ_p, and the ±1 nodes fell outside the reach: one
 /// lookup, and the in-plane variance σ_p² the blur does not supply was lost (dark points beside
