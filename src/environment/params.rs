@@ -88,8 +88,8 @@ pub const BRDF_LAYER_TEXEL: f64 = 2.0 / 3.0;
 /// gave nothing.
 pub const BRDF_FINE_LAYERS: u32 = 3;
 
-/// The `brdf` model's widest layer: with the fine layer the series from β_min has one step fewer,
-/// and this keeps its ratio (×1.32 per layer, [`PrefilterParams::for_model`]).
+/// The `brdf` model's widest layer: 14 layers from β_min to it keep the ratio of SPEC's K = 16
+/// series, 50^(1/14) ≈ 1.32 per layer ([`PrefilterParams::for_model`]).
 pub const BRDF_BETA_MAX: f64 = 0.76;
 
 /// The `brdf` model's layer count: the sharp map, [`BRDF_FINE_LAYERS`], then β_min …
