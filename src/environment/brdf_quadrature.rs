@@ -37,9 +37,6 @@ pub const BRDF_SAMPLES: u32 = 1024;
 /// ray pays them, and the paths' own noise is larger than the quadrature's error at 32.
 pub const BRDF_HIT_SAMPLES: u32 = 32;
 
-/// Layers K of the environment and residual a `brdf` draw reads (`PrefilterParams::for_model`).
-pub use super::params::BRDF_LAYERS;
-
 /// The specular directional albedo A(nv) = ∫ f_spec·(N·s) dω_s of a material at the
 /// `ALBEDO_KNOTS` knots nv = (k/(ALBEDO_KNOTS − 1))², as the shaders read them: (nv, A_r, A_g,
 /// A_b). The knots crowd towards grazing, where A changes fastest.

@@ -181,7 +181,8 @@ impl PrefilterParams {
 
     /// β_k of SPEC §4: β_0 = 0; β_k = β_min·(β_max/β_min)^((k-1)/(K-2)) for k ≥ 1 (K = 2: β_1 = β_min).
     /// With F [`fine_layers`](Self::fine_layers), β_min is layer F + 1 and the series runs from
-    /// layer 1 at its own ratio r = (β_max/β_min)^(1/(K−2−F)): β_k = β_min·r^(k−1−F).
+    /// layer 1 at its own ratio r = (β_max/β_min)^(1/(K−2−F)): β_k = β_min·r^(k−1−F). Where β_min
+    /// is the last layer (K = F + 2) there is no ratio, and each fine layer halves the one above.
     pub fn beta(&self, k: u32) -> f64 {
         if k == 0 {
             return 0.0;

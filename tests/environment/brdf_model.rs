@@ -280,7 +280,7 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 /// deterministic: the same build gives the same figures). The studio's means were 4.26 %
 /// (m = 0.2) and 14.0 % (0.5) before the rough split, 3.86 % (0.05) before the lattice read it,
 /// 2.23 % before the finer layers (`BRDF_LAYER_TEXEL`) and the lattice's widest step
-/// (`LATTICE_MAX_STEP`), 2.12 % before the fine layer (`BRDF_FINE_LAYER`, which took m = 0.02
+/// (`LATTICE_MAX_STEP`), 2.12 % before the first fine layer (at β_min/2, which took m = 0.02
 /// from 2.45 to 1.87 % here and from 2.52 to 1.60 % on the courtyard), 1.87 / 1.66 % at m = 0.02
 /// / 0.05 before the lattice's reach of 3 σ and the lookups' blend in variance (`LATTICE_REACH`,
 /// `layered_radiance`; the courtyard's 1.60 / 1.80 %, then 1.05 / 1.25 %), 1.40 % at m = 0.02

@@ -12,9 +12,10 @@ use crate::{Error, Result};
 
 impl GpuEnvironment {
     /// Uploads `env` (layers with their β, and the irradiance cube) to the device. The input is
-    /// validated first: K in 2..=MAX_ENV_LAYERS (20) layers, one β per layer (β_0 = 0, then finite, in (0, 4],
-    /// non-decreasing), power-of-two faces (layer 0 in 16..=4096, the others and the irradiance no
-    /// larger than layer 0, none larger than the one before), 6·M² texels per cube, all finite.
+    /// validated first: K in 2..=`MAX_ENV_LAYERS` (20) layers, one β per layer (β_0 = 0, then
+    /// finite, in (0, 4], non-decreasing), power-of-two faces (layer 0 in 16..=4096, the others
+    /// and the irradiance no larger than layer 0, none larger than the one before), 6·M² texels
+    /// per cube, all finite.
     pub fn upload(gpu: &GpuContext, env: &PrefilteredEnvironment) -> Result<GpuEnvironment> {
         validate(env)?;
         let layer_buffers = env

@@ -234,8 +234,8 @@ shader_interface! {
             /// The layers' geometric run (SPEC §4: β_k = β_min·(β_max/β_min)^(…) from layer 1 on;
             /// the `brdf` model's fine layers continue it below β_min): x = ln β_1, y = 1/Δ with Δ
             /// the run's step in ln β, z = 1 where the β above are that run (raster/draw/frame.rs
-            /// `geometric_run`), 0 otherwise; w unused. The `brdf` model's lookups find their layers from it without a search
-            /// (frame.glsl `layer_pair_of_run`).
+            /// `geometric_run`), 0 otherwise; w unused. The `brdf` model's lookups find their
+            /// layers from it without a search (frame.glsl `layer_pair_of_run`).
             layer_run: vec4,
             /// What the `brdf` model's blend in variance needs of the layers, packed once a draw
             /// (frame.rs `set_environment_layers`): x = layer 0's variance, its texels' read
