@@ -6,7 +6,7 @@
 // lobe (m ≤ 0.06) a lattice of nodes on the plane of incidence, each read at the blur that gives
 // the lobe's width across the plane (`specular_lattice`: three lookups near normal incidence, up
 // to 49 at grazing); for a middling one (0.07 ≤ m ≤ 0.22, the rough preset) a grid of slopes
-// from the lobe's Gaussian less the lookups' blur (`specular_grid`, ~100 lookups); for a wide one
+// from the lobe's Gaussian less the lookups' blur (`specular_grid`, ~700 lookups); for a wide one
 // (m ≥ 0.3) `samples` half vectors from a Fibonacci lattice in the Beckmann
 // lobe, in a frame whose first axis lies in the plane of incidence; each reflected direction s
 // weighs F(acos V·H)·G·(V·H)/(nv·nh) and reads the layers at the β whose lobe covers its share
@@ -346,19 +346,20 @@ float node_blur(vec3 v, vec3 h, vec3 tangent, vec3 bitangent, float x, float y, 
 
 // The wider-lobe quadrature (twin: `specular_grid`, whose doc derives it): a grid of Beckmann
 // slopes from the lobe's Gaussian less the lookups' blur, each read at its node's blur from the
-// layers at `base`.
-vec3 specular_grid(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
+// layers at `base`; `grid` its constants (frame.env_grid or env_variate_grid: t, spacing, reach,
+// most nodes on each side along the plane).
+vec3 specular_grid(LacquerParams p, vec3 n, vec3 v, float nv, int base, vec4 grid) {
     vec3 tangent, bitangent;
     incidence_frame(n, v, nv, tangent, bitangent);
-    float share = frame.env_grid.x;
-    float spacing = frame.env_grid.y;
-    float reach = frame.env_grid.z;
+    float share = grid.x;
+    float spacing = grid.y;
+    float reach = grid.z;
     float sigma = p.beckmann_m * 0.70710678;
     float beta = 2.0 * nv * sigma * share;
     float var_along = sigma * sigma - (0.5 * beta) * (0.5 * beta);
     float var_across = sigma * sigma - (0.5 * beta / nv) * (0.5 * beta / nv);
     float step_across = spacing * 0.5 * beta / nv;
-    float step_along = max(spacing * 0.5 * beta, reach * sqrt(var_along) / frame.env_grid.w);
+    float step_along = max(spacing * 0.5 * beta, reach * sqrt(var_along) / grid.w);
     int half_along = int(ceil(reach * sqrt(var_along) / step_along));
     int half_across = int(ceil(reach * sqrt(var_across) / step_across));
     vec3 sum = vec3(0.0);
@@ -438,7 +439,9 @@ vec3 brdf_environment_specular(LacquerParams p, vec3 n, vec3 v, float nv, int sa
         lookups += shares.x * specular_lattice(p, n, v, nv, lattice_rough ? rough_base : 0);
     }
     if (shares.y > 0.0) {
-        lookups += shares.y * specular_grid(p, n, v, nv, rough_base);
+        // paper's control variate reads the cheaper grid (twin: `grid_for`).
+        vec4 grid = samples == ENV_VARIATE_SAMPLES ? frame.env_variate_grid : frame.env_grid;
+        lookups += shares.y * specular_grid(p, n, v, nv, rough_base, grid);
     }
     if (shares.z > 0.0) {
         lookups += shares.z * specular_fis(p, n, v, nv, samples, rough_base);

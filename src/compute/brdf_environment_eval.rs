@@ -3,7 +3,7 @@
 //! pairs in a compute shader, so tests can hold it against its CPU twin
 //! (`environment::brdf_quadrature`) number by number.
 
-use crate::environment::brdf_quadrature::{albedo_knots, BRDF_HIT_SAMPLES, BRDF_SAMPLES};
+use crate::environment::brdf_quadrature::{albedo_knots, BRDF_HIT_SAMPLES};
 use crate::environment::gpu::{GpuEnvironment, LayerApronPass};
 use crate::gpu::shaders::interface::{
     BrdfEvalParams, DrawConstants, Frame, ObjectMaterial, BACKGROUND_COLOR, BRDF_EVAL_WORKGROUP,
@@ -33,13 +33,15 @@ const BINDINGS: [Binding; 6] = [
 /// directional albedo from `albedo_knots`) (world frame; v towards
 /// the eye), for one environment (with its bright split when one is attached, as a draw reads it):
 /// RGB per pair. The vectors are normalised in f64 before the
-/// conversion to f32, so the GPU sees the unit vectors the CPU twin sees.
+/// conversion to f32, so the GPU sees the unit vectors the CPU twin sees. `samples` lobe samples
+/// where the draw has `BRDF_SAMPLES`: `ENV_VARIATE_SAMPLES` evaluates what `paper`'s control
+/// variate reads (its grid too, `brdf_quadrature::grid_for`).
 pub fn brdf_environment_specular_gpu(
     gpu: &GpuContext,
     env: &GpuEnvironment,
-    brdf: &BrdfParams,
-    fresnel: &FresnelTable,
+    (brdf, fresnel): (&BrdfParams, &FresnelTable),
     pairs: &[[DVec3; 2]],
+    samples: u32,
 ) -> Result<Vec<[f32; 3]>> {
     let rows = pairs.len();
     if rows == 0 {
@@ -50,7 +52,7 @@ pub fn brdf_environment_specular_gpu(
         sample_count: 1,
         background_kind: BACKGROUND_COLOR,
         fresnel_pow2_grid: 0,
-        env_samples: BRDF_SAMPLES,
+        env_samples: samples,
         env_hit_samples: BRDF_HIT_SAMPLES,
         shadows: 0,
         integral: 0,

@@ -20,7 +20,9 @@ use super::cube::{direction_to_face, face_direction};
 use super::image::{CubeImage, PrefilteredEnvironment};
 use super::layer_pair;
 use super::params::{layer_blend, texel_read_variance};
-use crate::gpu::shaders::interface::{ALBEDO_KNOTS, BRIGHT_LOBE_CULL, FIBONACCI_STEP};
+use crate::gpu::shaders::interface::{
+    ALBEDO_KNOTS, BRIGHT_LOBE_CULL, ENV_VARIATE_SAMPLES, FIBONACCI_STEP,
+};
 use crate::model::brdf::cook_torrance_g;
 use crate::model::{BrdfParams, FresnelTable};
 
@@ -247,14 +249,58 @@ pub const LATTICE_M_HI: f64 = 0.07;
 pub const ROUGH_LATTICE_BLOCK: f64 = 1.5;
 pub const FIS_M_LO: f64 = 0.22;
 pub const FIS_M_HI: f64 = 0.3;
-/// The deconvolved slope grid (`specular_grid`): t, the share of the lobe's width across the
-/// plane of incidence that the lookups' blur supplies; the node spacing in units of the blur; the
-/// reach in standard deviations of the nodes' distribution; most nodes on each side along the
-/// plane. Measured in BENCHMARKS.md; packed into `Frame::env_grid`.
-pub const GRID_BLUR_SHARE: f64 = 0.45;
-pub const GRID_SPACING: f64 = 1.7;
-pub const GRID_REACH: f64 = 3.6;
-pub const GRID_MAX_HALF: u32 = 32;
+/// The deconvolved slope grid's constants (`specular_grid`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridConstants {
+    /// t, the share of the lobe's width across the plane of incidence that the lookups' blur
+    /// supplies.
+    pub blur_share: f64,
+    /// The node spacing in units of the blur.
+    pub spacing: f64,
+    /// The reach in standard deviations of the nodes' distribution.
+    pub reach: f64,
+    /// Most nodes on each side along the plane.
+    pub max_half: u32,
+}
+
+/// The grid of the points the camera sees. Measured in BENCHMARKS.md ("The grid's blur and
+/// reach"); packed into `Frame::env_grid`.
+/// The blur is a Gaussian in directions, which is a Gaussian in slopes only near the mirror
+/// direction: with lookups at exactly the blur asked (brute force over the map's pixels) the grid
+/// at t = 0.45 was still 1.14 % off on the courtyard's 112 points at m = 0.2 (one dark point
+/// +13 %), however far it reached. With less of the lobe in the blur the nodes carry its tails,
+/// where a dark point's light is: nodes reading single pixels at t = 0.05 were −13 % off at the
+/// board seen 10° from its normal with a reach of 3.6 σ, −0.8 % at 5. From t = 0.45, spacing 1.7,
+/// reach 3.6 and 32 nodes a side (~120 lookups face-on) to these (~700; ~2,300 at most, at
+/// grazing) the 112 points at m = 0.2 went from 1.08 / 6.5 % (mean / p99) to 0.28 / 1.9 % on the
+/// courtyard, 0.64 / 4.3 to 0.32 / 2.8 % on the studio. Fewer than 64 nodes a side hold the step
+/// wider than the blur at grazing (at 48 one of the courtyard's points was 6.8 % off, against
+/// 3.3 % at 64, in the residual's term alone).
+pub const GRID: GridConstants = GridConstants {
+    blur_share: 0.2,
+    spacing: 2.0,
+    reach: 4.5,
+    max_half: 64,
+};
+/// The grid of `paper`'s control variate (`ENV_VARIATE_SAMPLES`), which needs only an estimate of
+/// the integral and should not pay the `brdf` model's accuracy: the grid before [`GRID`]. With
+/// [`GRID`] there a ray-traced `paper` render of the default scene with rough bowls at 512² took
+/// 3.9–4.1 s instead of 3.2–3.4 s (BENCHMARKS.md). Packed into `Frame::env_variate_grid`.
+pub const VARIATE_GRID: GridConstants = GridConstants {
+    blur_share: 0.45,
+    spacing: 1.7,
+    reach: 3.6,
+    max_half: 32,
+};
+
+/// The grid a `brdf_specular` with `samples` lobe samples reads (twin of brdf_environment.glsl's
+/// choice): [`VARIATE_GRID`] for `paper`'s control variate, [`GRID`] otherwise.
+pub fn grid_for(samples: u32) -> &'static GridConstants {
+    match samples == ENV_VARIATE_SAMPLES {
+        true => &VARIATE_GRID,
+        false => &GRID,
+    }
+}
 
 /// The least m whose lattice reads the rough split, for blocks `block_angle` radians across
 /// ([`ROUGH_LATTICE_BLOCK`]), as `Frame::env_lattice_share.y` holds it: the shader compares the
@@ -266,7 +312,7 @@ pub fn rough_lattice_m(block_angle: f64) -> f32 {
 /// Each quadrature's share of the `brdf` model's lookups for roughness m (lattice, grid,
 /// filtered importance sampling; they sum to 1). `camera`: the point the camera sees; at a
 /// path's hit (false) filtered importance sampling with its few samples takes the grid's share,
-/// since every ray would pay the grid's ~100 lookups and the path's own noise is larger than
+/// since every ray would pay the grid's ~700 lookups and the path's own noise is larger than
 /// either quadrature's error.
 pub fn quadrature_shares(m: f64, camera: bool) -> [f64; 3] {
     let lattice = ((LATTICE_M_HI - m) / (LATTICE_M_HI - LATTICE_M_LO)).clamp(0.0, 1.0);
@@ -346,14 +392,15 @@ pub fn specular_lattice(
 /// of incidence and β/(2·nv) across it (the reflection's Jacobian: 2 and 2·nv), so nodes drawn
 /// from a Gaussian of variances σ² − (β/2)² and σ² − (β/(2nv))², each read at β, sum to the lobe
 /// with the blur's width restored instead of added (filtered importance sampling adds it). β =
-/// `GRID_BLUR_SHARE`·2·nv·σ; the nodes lie on a regular grid `GRID_SPACING`·β apart in
-/// directions (no ripple from a grid that fine under a Gaussian that wide), out to `GRID_REACH`
+/// t·2·nv·σ (t = `grid.blur_share`); the nodes lie on a regular grid `grid.spacing`·β apart in
+/// directions (no ripple from a grid that fine under a Gaussian that wide), out to `grid.reach`
 /// deviations, tapered like the lattice. Away from the mirror direction the Jacobian changes, so
 /// each node reads the blur that is the same slope blur there: β scaled by the geometric mean of
 /// its Jacobian's two axes against theirs at the centre ([`node_blur`]). Normalised by A(nv) like
 /// [`specular_quadrature`].
 pub fn specular_grid(
     env: &PrefilteredEnvironment,
+    grid: &GridConstants,
     (brdf, fresnel, albedo): (&BrdfParams, &FresnelTable, &[[f32; 4]]),
     n: DVec3,
     v: DVec3,
@@ -367,24 +414,24 @@ pub fn specular_grid(
         return [0.0; 3];
     };
     let sigma = brdf.beckmann_m / std::f64::consts::SQRT_2;
-    let beta = 2.0 * nv * sigma * GRID_BLUR_SHARE;
+    let beta = 2.0 * nv * sigma * grid.blur_share;
     // The nodes' variances along and across the plane: the lobe's less the lookups' blur.
     let var_along = sigma * sigma - (0.5 * beta).powi(2);
     let var_across = sigma * sigma - (0.5 * beta / nv).powi(2);
-    let step_across = GRID_SPACING * 0.5 * beta / nv;
+    let step_across = grid.spacing * 0.5 * beta / nv;
     let step_along =
-        (GRID_SPACING * 0.5 * beta).max(GRID_REACH * var_along.sqrt() / f64::from(GRID_MAX_HALF));
-    let half_along = (GRID_REACH * var_along.sqrt() / step_along).ceil() as i32;
-    let half_across = (GRID_REACH * var_across.sqrt() / step_across).ceil() as i32;
+        (grid.spacing * 0.5 * beta).max(grid.reach * var_along.sqrt() / f64::from(grid.max_half));
+    let half_along = (grid.reach * var_along.sqrt() / step_along).ceil() as i32;
+    let half_across = (grid.reach * var_across.sqrt() / step_across).ceil() as i32;
     let mut sums = LookupSums::default();
     for i in -half_along..=half_along {
         for j in -half_across..=half_across {
             let (x, y) = (f64::from(i) * step_along, f64::from(j) * step_across);
             let r = (x * x / var_along + y * y / var_across).sqrt();
-            if r >= GRID_REACH {
+            if r >= grid.reach {
                 continue;
             }
-            let scale = (-0.5 * r * r).exp() * lattice_taper(r / GRID_REACH);
+            let scale = (-0.5 * r * r).exp() * lattice_taper(r / grid.reach);
             let h = (n + tangent * x + bitangent * y).normalize();
             let vh = v.dot(h);
             if vh > 0.0 {
@@ -586,7 +633,8 @@ impl<'a> BrdfSources<'a> {
 /// grid, filtered importance sampling with `samples` samples, or two of them blended, as
 /// [`quadrature_shares`] says for the material's m, plus the bright lights. The grid serves the
 /// points the camera sees (`samples` above `BRDF_HIT_SAMPLES`: `BRDF_SAMPLES`, or
-/// `ENV_VARIATE_SAMPLES` for `paper`'s control variate); at a path's hit (`BRDF_HIT_SAMPLES`)
+/// `ENV_VARIATE_SAMPLES` for `paper`'s control variate, each with its grid, [`grid_for`]); at a
+/// path's hit (`BRDF_HIT_SAMPLES`)
 /// filtered importance sampling takes its share. Where the camera looks the grid and filtered
 /// importance sampling read the rough split, and the lattice does from [`rough_lattice_m`] up;
 /// each split's lights take the share of the lookups that read its residual. Everything at a
@@ -622,7 +670,9 @@ pub fn brdf_specular(
     add(shares[0], &|| {
         specular_lattice(lattice_residual, material, n, v)
     });
-    add(shares[1], &|| specular_grid(rough, material, n, v));
+    add(shares[1], &|| {
+        specular_grid(rough, grid_for(samples), material, n, v)
+    });
     add(shares[2], &|| {
         specular_quadrature(rough, samples, material, n, v)
     });

@@ -267,10 +267,12 @@ shader_interface! {
             /// `LATTICE_*`): spacing, reach, taper, most nodes on each side; the roughness bands
             /// (m_lo, m_hi) over which it hands over to the grid, and the grid to filtered
             /// importance sampling (`LATTICE_M_*`, `FIS_M_*`); and the deconvolved slope grid
-            /// (`GRID_*`): blur share t, spacing, reach, most nodes on each side along the plane.
+            /// (`GRID`, and `VARIATE_GRID` for `paper`'s control variate): blur share t,
+            /// spacing, reach, most nodes on each side along the plane.
             env_lattice: vec4,
             env_lattice_band: vec4,
             env_grid: vec4,
+            env_variate_grid: vec4,
             /// x: the lattice's blur share t (`LATTICE_BLUR_SHARE`); y: the least m whose lattice
             /// reads the rough split where the camera looks (brdf_quadrature.rs
             /// `rough_lattice_m`); z: the largest m the rough lights' direction bins serve (the

@@ -171,12 +171,16 @@ impl Frame {
         // light bins' (`append_light_bins`).
         self.env_lattice_share[0] = q::LATTICE_BLUR_SHARE as f32;
         self.env_lattice_share[3] = q::LATTICE_MAX_STEP as f32;
-        self.env_grid = [
-            q::GRID_BLUR_SHARE as f32,
-            q::GRID_SPACING as f32,
-            q::GRID_REACH as f32,
-            q::GRID_MAX_HALF as f32,
-        ];
+        let pack = |grid: &q::GridConstants| {
+            [
+                grid.blur_share as f32,
+                grid.spacing as f32,
+                grid.reach as f32,
+                grid.max_half as f32,
+            ]
+        };
+        self.env_grid = pack(&q::GRID);
+        self.env_variate_grid = pack(&q::VARIATE_GRID);
     }
 
     /// Packs the `brdf` model's lights: the bright split's (at most `MAX_ENV_LIGHTS`, which
