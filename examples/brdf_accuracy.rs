@@ -19,11 +19,12 @@
 //! cargo run --release --example brdf_accuracy -- assets/env/courtyard.hdr 0.05,0.2 [--images]
 //! ```
 //!
-//! The reference is slow (3 × 3 sub-cells per pixel for m < 0.1): about two minutes per m on two
-//! cores.
+//! The reference splits each pixel into as many cells as resolve the lobe where it is narrowest
+//! (`converged_subsamples`: up to 64 × 64 within a few degrees of the horizon at small m), which
+//! makes it slow: several minutes per m on two cores for `--images`.
 
 use glam::DVec3;
-use shikki::environment::brdf_definition::specular_integral_definition;
+use shikki::environment::brdf_definition::{converged_subsamples, specular_integral_definition};
 use shikki::environment::brdf_quadrature::{
     albedo_knots, brdf_specular, BrdfSources, BRDF_SAMPLES,
 };
@@ -76,8 +77,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             albedo: [0.5, 0.06, 0.03],
         };
         let albedo = albedo_knots(&brdf, &fresnel);
-        let cells = if m < 0.1 { 3 } else { 1 };
         let pair = |(n, v): (DVec3, DVec3)| {
+            let cells = converged_subsamples(source.width, m, n.normalize().dot(v.normalize()));
             let want = specular_integral_definition(&source, light, &brdf, &fresnel, n, v, cells);
             let material = (&brdf, &fresnel, &albedo[..]);
             let got = brdf_specular(sources, BRDF_SAMPLES, material, n, v);
