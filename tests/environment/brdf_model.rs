@@ -84,10 +84,10 @@ fn reference(
 /// (mean, p99): m = 0.05: 1.9 %, 16 % at 64 samples; 0.31 %, 3.0 % at 1024; 0.22 %, 1.1 % at
 /// 8192. m = 0.5: 5.5 %, 25 %; 0.50 %, 3.9 %; 0.11 %, 0.60 % (against a reference of 3 × 3 cells
 /// a pixel, before `converged_subsamples`: 2.3 / 22, 0.44 / 3.9, 0.30 / 1.8 % and 5.7 / 27, 0.58 /
-/// 4.2, 0.18 / 0.85 %). The bounds: each step must cut the
-/// mean error, and at 8192 samples mean ≤ 0.5 % and p99 ≤ 5 % (the p99). At the sample
-/// counts a render can afford the error is far above the 1 % mean: the courtyard's sun
-/// is a small bright source the lobe samples find only by chance (see BENCHMARKS.md).
+/// 4.2, 0.18 / 0.85 %). The bounds: each step must cut the mean error, and at 8192 samples mean
+/// ≤ 0.5 % and p99 ≤ 5 % (the p99). At the sample counts a render can afford the error is
+/// far above the 1 % mean: the courtyard's sun is a small bright source the lobe samples
+/// find only by chance (see BENCHMARKS.md).
 #[test]
 fn quadrature_converges_to_the_brute_force_integral() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/courtyard.hdr");
@@ -294,9 +294,9 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 /// lookups) and is held to it, and so is every map at m = 0.5 (filtered importance sampling's 1,024
 /// samples; at 128 the courtyard read 2.50 % and 18.3 %) and at m = 0.2 (the grid; 1.08 / 6.5 % on
 /// the courtyard and 0.64 / 4.3 % on the studio before its smaller blur share and longer reach,
-/// `GRID`); the courtyard and the studio do not at the smaller m (the lookups' aliasing
-/// of sharp edges, and relative errors of a few % where a dark point sits beside bright ones,
-/// BENCHMARKS.md: 1–2 % mean), so every mean is also held to at most 1.25× its measured value,
+/// `GRID`); the courtyard and the studio do not at the smaller m (relative errors of a few %
+/// where a dark point sits beside bright ones, which the lattice's one lookup across the plane of
+/// incidence misses even when exact: BENCHMARKS.md, "The smooth preset's error"), so every mean is also held to at most 1.25× its measured value,
 /// which catches a regression (the estimator is deterministic: the same build gives the same
 /// figures). The studio's means were 4.26 % (m = 0.2) and 14.0 % (0.5) before the rough split, 3.86
 /// % (0.05) before the lattice read it, 2.23 % before the finer layers (`BRDF_LAYER_TEXEL`) and the
@@ -305,7 +305,7 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 /// 1.66 % at m = 0.02 / 0.05 before the lattice's reach of 3 σ and the lookups' blend in variance
 /// (`LATTICE_REACH`, `layered_radiance`; the courtyard's 1.60 / 1.80 %, then 1.05 / 1.25 %), 1.40 %
 /// at m = 0.02 before the fine layers continued the series below β_min (`BRDF_FINE_LAYERS`; the
-/// courtyard's 1.05 %, now 0.73 %), 1.33 % at m = 0.05 before the lattice's 24 nodes a side at
+/// courtyard's 1.05 %, then 0.73 %), 1.33 % at m = 0.05 before the lattice's 24 nodes a side at
 /// grazing (`LATTICE_MAX_HALF`, 12 before; now 0.90 %); at m = 0.5 it is 0.16 %, p99 1.4 % (0.44 %,
 /// 4.3 % at 128 samples), and its relative RMSE at m = 0.05 is 0.33 %. Each point's reference
 /// resolves the lobe there (`converged_subsamples`); with 3 × 3 cells a pixel, the rule until
