@@ -186,9 +186,12 @@ fn soak(gpu: GpuContext, renders: usize, environments: &[String], check_resident
     // 10-20 MB apart (its threads' malloc arenas, LLVM) and may stay on the higher one for the
     // rest of a run, so a bound on "end vs start" fails on noise (CI saw 189 -> 203 MB, +7.4%,
     // with the 5th tenth of that run already at 203 MB). A leak instead makes the end higher than
-    // anything before it: the median of the last window must stay within 3% of the highest
-    // window median of the first half after the warm-up. (A leak of 100 KiB a render shows in
-    // the default 120 renders; smaller ones in the 2,000-render run of docs/reliability.md.)
+    // anything before it: the lower median of the last two windows must stay within 3% of the
+    // highest window median of the first half after the warm-up. Two windows, because a step can
+    // also come and go: CI saw the last window's median at 347 MB (+4.9%) with the tenth before
+    // it back at 331 MB, the first half's ceiling, and the heap flat. (At ~330 MB a leak of
+    // 180 KiB a render shows in the default 120 renders; the Rust heap's check below is exact,
+    // and smaller leaks of the driver's show in the 2,000-render run of docs/reliability.md.)
     let warm_up = (renders / 10).max(COVERING + 4);
     let window = (renders / 10).max(8);
     let checkpoints = 4;
@@ -244,7 +247,8 @@ fn soak(gpu: GpuContext, renders: usize, environments: &[String], check_resident
     };
     // rss[k] was taken after render k + 1.
     let rss_warm = median(&rss[warm_up - 1..warm_up - 1 + window]);
-    let rss_end = median(&rss[rss.len() - window..]);
+    let rss_end = median(&rss[rss.len() - window..])
+        .min(median(&rss[rss.len() - 2 * window..rss.len() - window]));
     let first_half = &rss[warm_up - 1..warm_up - 1 + (rss.len() - warm_up) / 2];
     let rss_ceiling = first_half
         .windows(window)
@@ -284,7 +288,7 @@ fn soak(gpu: GpuContext, renders: usize, environments: &[String], check_resident
     eprintln!(
         "soak (validation {}): {renders} renders (+{repeats} repeats, {checkpoints} cache clears) in {seconds:.1} \
          s; VmRSS median {rss_warm} KiB over renders {warm_up}..{}, {rss_end} KiB over the last \
-         {window} ({:+.2}%), first-half ceiling {rss_ceiling} KiB, min {} max {} KiB; device memory idle {idle} B, after job 0 \
+         {window} or the {window} before, the lower ({:+.2}%), first-half ceiling {rss_ceiling} KiB, min {} max {} KiB; device memory idle {idle} B, after job 0 \
          {after_first} B, peak {peak} B\nVmRSS medians by tenth of the run (KiB): {}\nRust heap after the last render {heap_end} B, \
          highest in the first half {heap_ceiling} B; without a renderer at the cache clears \
          {heap_without_renderer:?} B",
@@ -302,8 +306,8 @@ fn soak(gpu: GpuContext, renders: usize, environments: &[String], check_resident
     );
     assert!(
         !check_resident || rss_end as f64 <= rss_ceiling as f64 * 1.03,
-        "resident memory grew to {rss_end} KiB (median of the last {window} renders), more than 3% \
-         above {rss_ceiling} KiB, the highest {window}-render median in the first half after the \
+        "resident memory grew to {rss_end} KiB (median of the last {window} renders, or of the \
+         {window} before if lower), more than 3% above {rss_ceiling} KiB, the highest {window}-render median in the first half after the \
          {warm_up}-render warm-up"
     );
 }
