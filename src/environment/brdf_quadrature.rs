@@ -270,14 +270,14 @@ pub struct GridConstants {
 /// The blur is a Gaussian in directions, which is a Gaussian in slopes only near the mirror
 /// direction: with lookups at exactly the blur asked (brute force over the map's pixels) the grid
 /// at t = 0.45 was still 1.14 % off on the courtyard's 112 points at m = 0.2 (one dark point
-/// +13 %), however far it reached. With less of the lobe in the blur the nodes carry its tails,
-/// where a dark point's light is: nodes reading single pixels at t = 0.05 were −13 % off at the
-/// board seen 10° from its normal with a reach of 3.6 σ, −0.8 % at 5. From t = 0.45, spacing 1.7,
-/// reach 3.6 and 32 nodes a side (~120 lookups face-on) to these (~700; ~2,300 at most, at
+/// +13 %), however far it reached. With less of the lobe in the blur the nodes carry its tails, where a
+/// dark point's light is: nodes reading single pixels at t = 0.05 were −13 % off at the board seen
+/// 10° from its normal with a reach of 3.6 σ, −0.8 % at 5. From t = 0.45, spacing 1.7, reach 3.6
+/// and 32 nodes a side (57 lookups face-on, 431 at most) to these (377 face-on; 2,205 at most, at
 /// grazing) the 112 points at m = 0.2 went from 1.08 / 6.5 % (mean / p99) to 0.28 / 1.9 % on the
 /// courtyard, 0.64 / 4.3 to 0.32 / 2.8 % on the studio. Fewer than 64 nodes a side hold the step
-/// wider than the blur at grazing (at 48 one of the courtyard's points was 6.8 % off, against
-/// 3.3 % at 64, in the residual's term alone).
+/// wider than the blur at grazing (at 48 one of the courtyard's points was 6.8 % off, against 3.3 %
+/// at 64, in the residual's term alone).
 pub const GRID: GridConstants = GridConstants {
     blur_share: 0.2,
     spacing: 2.0,
@@ -314,7 +314,7 @@ pub fn rough_lattice_m(block_angle: f64) -> f32 {
 /// Each quadrature's share of the `brdf` model's lookups for roughness m (lattice, grid,
 /// filtered importance sampling; they sum to 1). `camera`: the point the camera sees; at a
 /// path's hit (false) filtered importance sampling with its few samples takes the grid's share,
-/// since every ray would pay the grid's ~700 lookups and the path's own noise is larger than
+/// since every ray would pay the grid's 377–2,205 lookups and the path's own noise is larger than
 /// either quadrature's error.
 pub fn quadrature_shares(m: f64, camera: bool) -> [f64; 3] {
     let lattice = ((LATTICE_M_HI - m) / (LATTICE_M_HI - LATTICE_M_LO)).clamp(0.0, 1.0);
@@ -631,16 +631,15 @@ impl<'a> BrdfSources<'a> {
     }
 }
 
-/// The `brdf` model's specular term as the renderer computes it: lookups by the lattice, the
-/// grid, filtered importance sampling with `samples` samples, or two of them blended, as
+/// The `brdf` model's specular term as the renderer computes it: lookups by the lattice, the grid,
+/// filtered importance sampling with `samples` samples, or two of them blended, as
 /// [`quadrature_shares`] says for the material's m, plus the bright lights. The grid serves the
 /// points the camera sees (`samples` above `BRDF_HIT_SAMPLES`: `BRDF_SAMPLES`, or
 /// `ENV_VARIATE_SAMPLES` for `paper`'s control variate, each with its grid, [`grid_for`]); at a
-/// path's hit (`BRDF_HIT_SAMPLES`)
-/// filtered importance sampling takes its share. Where the camera looks the grid and filtered
-/// importance sampling read the rough split, and the lattice does from [`rough_lattice_m`] up;
-/// each split's lights take the share of the lookups that read its residual. Everything at a
-/// path's hit reads the bright split.
+/// path's hit (`BRDF_HIT_SAMPLES`) filtered importance sampling takes its share. Where the camera
+/// looks the grid and filtered importance sampling read the rough split, and the lattice does from
+/// [`rough_lattice_m`] up; each split's lights take the share of the lookups that read its
+/// residual. Everything at a path's hit reads the bright split.
 pub fn brdf_specular(
     sources: BrdfSources<'_>,
     samples: u32,

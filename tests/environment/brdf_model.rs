@@ -294,24 +294,24 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 /// lookups) and is held to it, and so is every map at m = 0.5 (filtered importance sampling's 1,024
 /// samples; at 128 the courtyard read 2.50 % and 18.3 %) and at m = 0.2 (the grid; 1.08 / 6.5 % on
 /// the courtyard and 0.64 / 4.3 % on the studio before its smaller blur share and longer reach,
-/// `GRID`); the courtyard and the studio do not at the smaller m (relative errors of a few %
-/// where a dark point sits beside bright ones, which the lattice's one lookup across the plane of
-/// incidence misses even when exact: BENCHMARKS.md, "The smooth preset's error"), so every mean is also held to at most 1.25× its measured value,
-/// which catches a regression (the estimator is deterministic: the same build gives the same
-/// figures). The studio's means were 4.26 % (m = 0.2) and 14.0 % (0.5) before the rough split, 3.86
-/// % (0.05) before the lattice read it, 2.23 % before the finer layers (`BRDF_LAYER_TEXEL`) and the
-/// lattice's widest step (`LATTICE_MAX_STEP`), 2.12 % before the first fine layer (at β_min/2,
-/// which took m = 0.02 from 2.45 to 1.87 % here and from 2.52 to 1.60 % on the courtyard), 1.87 /
-/// 1.66 % at m = 0.02 / 0.05 before the lattice's reach of 3 σ and the lookups' blend in variance
-/// (`LATTICE_REACH`, `layered_radiance`; the courtyard's 1.60 / 1.80 %, then 1.05 / 1.25 %), 1.40 %
-/// at m = 0.02 before the fine layers continued the series below β_min (`BRDF_FINE_LAYERS`; the
-/// courtyard's 1.05 %, then 0.73 %), 1.33 % at m = 0.05 before the lattice's 24 nodes a side at
-/// grazing (`LATTICE_MAX_HALF`, 12 before; now 0.90 %); at m = 0.5 it is 0.16 %, p99 1.4 % (0.44 %,
-/// 4.3 % at 128 samples), and its relative RMSE at m = 0.05 is 0.33 %. Each point's reference
-/// resolves the lobe there (`converged_subsamples`); with 3 × 3 cells a pixel, the rule until
-/// 2026-12-06, the point at nv = 0.035 read 4–5 % of the reference's own error at m = 0.02, and
-/// the courtyard's mean and p99 at m = 0.02 were 0.73 / 6.0 % instead of 0.70 / 5.4 %, the
-/// studio's 1.14 / 15.9 % instead of 1.10 / 15.9 %.
+/// `GRID`); the courtyard and the studio do not at the smaller m (relative errors of a few % where
+/// a dark point sits beside bright ones, which the lattice's one lookup across the plane of
+/// incidence misses even when exact: BENCHMARKS.md, "The smooth preset's error"), so every mean is
+/// also held to at most 1.25× its measured value, which catches a regression (the estimator is
+/// deterministic: the same build gives the same figures). The studio's means were 4.26 % (m = 0.2)
+/// and 14.0 % (0.5) before the rough split, 3.86 % (0.05) before the lattice read it, 2.23 % before
+/// the finer layers (`BRDF_LAYER_TEXEL`) and the lattice's widest step (`LATTICE_MAX_STEP`), 2.12 %
+/// before the first fine layer (at β_min/2, which took m = 0.02 from 2.45 to 1.87 % here and from
+/// 2.52 to 1.60 % on the courtyard), 1.87 / 1.66 % at m = 0.02 / 0.05 before the lattice's reach of
+/// 3 σ and the lookups' blend in variance (`LATTICE_REACH`, `layered_radiance`; the courtyard's
+/// 1.60 / 1.80 %, then 1.05 / 1.25 %), 1.40 % at m = 0.02 before the fine layers continued the
+/// series below β_min (`BRDF_FINE_LAYERS`; the courtyard's 1.05 %, then 0.73 %), 1.33 % at m = 0.05
+/// before the lattice's 24 nodes a side at grazing (`LATTICE_MAX_HALF`, 12 before; now 0.90 %); at
+/// m = 0.5 it is 0.16 %, p99 1.4 % (0.44 %, 4.3 % at 128 samples), and its relative RMSE at
+/// m = 0.05 is 0.33 %. Each point's reference resolves the lobe there (`converged_subsamples`);
+/// with 3 × 3 cells a pixel, the rule until 2026-12-06, the point at nv = 0.035 read 4–5 % of the
+/// reference's own error at m = 0.02, and the courtyard's mean and p99 at m = 0.02 were
+/// 0.73 / 6.0 % instead of 0.70 / 5.4 %, the studio's 1.14 / 15.9 % instead of 1.10 / 15.9 %.
 #[test]
 fn error_at_the_render_sample_count() {
     let courtyard = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/courtyard.hdr");
@@ -514,10 +514,10 @@ fn the_lattice_is_continuous_in_the_view_angle() {
 /// The grid (m = 0.2, the rough preset) under the same sweep, both the camera's and the control
 /// variate's: its node count changes with nv too, and the taper must keep each node's entry
 /// continuous. Measured 1.2e-3 (`GRID`) and 1.15e-3 (`VARIATE_GRID`, the grid before it; 1.6e-3
-/// with the blend in log β); 2e-2 as for the lattice. The sweep starts one step off face-on: exactly at nv = 1 the plane
-/// of incidence is undefined and the frame takes a fixed axis, and the grid, unlike the
-/// lattice's single node there, is not symmetric under the frame's turn (8.2e-3 between nv = 1
-/// and the next step: a single direction).
+/// with the blend in log β); 2e-2 as for the lattice. The sweep starts one step off face-on:
+/// exactly at nv = 1 the plane of incidence is undefined and the frame takes a fixed axis, and the
+/// grid, unlike the lattice's single node there, is not symmetric under the frame's turn (8.2e-3
+/// between nv = 1 and the next step: a single direction).
 #[test]
 fn the_grid_is_continuous_in_the_view_angle() {
     use shikki::environment::brdf_quadrature::{specular_grid, GRID, VARIATE_GRID};
