@@ -231,10 +231,10 @@ enum ShikkiStatus shikki_material_set_diffuse_b(struct ShikkiMaterial material, 
 // r, the lacquer : colorant ratio, in [1, r*] unless extrapolate_g.
 enum ShikkiStatus shikki_material_set_lacquer_ratio(struct ShikkiMaterial material, double value);
 
-// A of the lacquer's n(λ) = A + B/λ².
+// A of the lacquer's n(λ) = A + B/λ², in [1, 10] (real lacquers 1.4–1.9).
 enum ShikkiStatus shikki_material_set_ior_a(struct ShikkiMaterial material, double value);
 
-// B of n(λ) = A + B/λ², in µm².
+// B of n(λ) = A + B/λ², in µm², in [0, 1] (real lacquers ≤ 0.02).
 enum ShikkiStatus shikki_material_set_ior_b(struct ShikkiMaterial material, double value);
 
 // β of the environment blur at normal view (> 0).
@@ -273,7 +273,8 @@ enum ShikkiStatus shikki_environment_load(const char *path, struct ShikkiEnviron
 
 // Makes an environment from linear RGB radiance, `width × height` pixels, row 0 at the top
 // (+Y), 3 floats per pixel (SPEC §4 mapping). The data is copied. Limits (checked before `rgb`
-// is read): each side 1 to 32768, at most 2^28 pixels.
+// is read): width 2 to 32768, height 1 to 32768 (at least 2 × 1 pixels, the smallest map the
+// renderer's prefilter takes), at most 2^28 pixels.
 //
 // # Safety
 // `rgb` is valid for reads of `width * height * 3` floats; `out` is valid for one write.
@@ -412,7 +413,9 @@ enum ShikkiStatus shikki_scene_add_directional_light(struct ShikkiScene scene, c
 // `position` and `intensity` are valid for 3 doubles each.
 enum ShikkiStatus shikki_scene_add_point_light(struct ShikkiScene scene, const double *position, const double *intensity);
 
-// Adds shikki's default three-light rig (the CLI's, when no light is given).
+// Adds shikki's default three-light rig (the CLI's, when no light is given): all three, or
+// none where the scene has no room for three more (then SHIKKI_STATUS_INVALID_ARGUMENT and the
+// scene is unchanged).
 enum ShikkiStatus shikki_scene_add_default_lights(struct ShikkiScene scene);
 
 // Removes every light.

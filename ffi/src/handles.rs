@@ -236,13 +236,17 @@ pub fn read<H: HandleType, T: Clone + Send + 'static>(handle: H) -> FfiResult<T>
     Ok(guard.clone())
 }
 
+/// The table is global: every test that inserts handles (here and in the other modules) takes a
+/// turn, so that one test's inserts cannot take the slot another expects to be reused.
+#[cfg(test)]
+pub(crate) fn test_table_turn() -> MutexGuard<'static, ()> {
+    static TURN: Mutex<()> = Mutex::new(());
+    TURN.lock().unwrap_or_else(|p| p.into_inner())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The table is global: these tests take turns so that one's inserts cannot take the slot
-    /// the other expects to be reused.
-    static SERIAL: Mutex<()> = Mutex::new(());
 
     fn status_of<T>(result: FfiResult<T>) -> Option<ShikkiStatus> {
         result.err().map(|e| e.status)
@@ -250,7 +254,7 @@ mod tests {
 
     #[test]
     fn a_destroyed_handle_stays_invalid_after_its_slot_is_reused() {
-        let _turn = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+        let _turn = test_table_turn();
         let first: ShikkiMaterial = insert(1_u32);
         remove(first).expect("first destroy succeeds");
         // The freed slot is taken again; only the generation tells the two handles apart.
@@ -272,7 +276,7 @@ mod tests {
 
     #[test]
     fn a_slot_whose_generation_ran_out_is_never_reused() {
-        let _turn = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+        let _turn = test_table_turn();
         let last: ShikkiScene = insert(7_u16);
         let index = (last.id & 0xffff_ffff) as usize - 1;
         // Fast-forward this slot to its last generation instead of 2^32 create/destroy cycles.
@@ -299,7 +303,7 @@ mod tests {
 
     #[test]
     fn zero_forged_and_wrong_kind_handles_are_rejected() {
-        let _turn = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+        let _turn = test_table_turn();
         let mesh: ShikkiMesh = insert(5_u8);
         let as_scene = ShikkiScene { id: mesh.id };
         let message = get::<_, u8>(as_scene).err().map(|e| e.message);

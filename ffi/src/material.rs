@@ -155,13 +155,13 @@ pub extern "C" fn shikki_material_set_lacquer_ratio(
     ffi_boundary!({ set_value(material, "r", MaterialValue::Number(value)) })
 }
 
-/// A of the lacquer's n(λ) = A + B/λ².
+/// A of the lacquer's n(λ) = A + B/λ², in [1, 10] (real lacquers 1.4–1.9).
 #[no_mangle]
 pub extern "C" fn shikki_material_set_ior_a(material: ShikkiMaterial, value: f64) -> ShikkiStatus {
     ffi_boundary!({ set_value(material, "ior_a", MaterialValue::Number(value)) })
 }
 
-/// B of n(λ) = A + B/λ², in µm².
+/// B of n(λ) = A + B/λ², in µm², in [0, 1] (real lacquers ≤ 0.02).
 #[no_mangle]
 pub extern "C" fn shikki_material_set_ior_b(material: ShikkiMaterial, value: f64) -> ShikkiStatus {
     ffi_boundary!({ set_value(material, "ior_b", MaterialValue::Number(value)) })
@@ -261,4 +261,56 @@ pub extern "C" fn shikki_material_validate(material: ShikkiMaterial) -> ShikkiSt
         material.fresnel_table()?;
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use std::ffi::CStr;
+
+    use super::*;
+    use crate::boundary::last_error_ptr;
+
+    fn last_error() -> String {
+        // SAFETY: last_error_ptr points to this thread's NUL-terminated message.
+        unsafe { CStr::from_ptr(last_error_ptr()) }
+            .to_string_lossy()
+            .into_owned()
+    }
+
+    #[test]
+    fn ior_setters_refuse_values_outside_their_range_and_keep_the_material() {
+        let _turn = handles::test_table_turn();
+        let handle = handles::insert::<ShikkiMaterial, _>(LacquerMaterial::default());
+        type Setter = extern "C" fn(ShikkiMaterial, f64) -> ShikkiStatus;
+        const B_RANGE: &str = "must be a finite number in [0, 1] µm²";
+        const A_RANGE: &str = "must be a finite number in [1, 10]";
+        let cases: [(Setter, f64, &str, &str); 4] = [
+            (shikki_material_set_ior_b, 1e308, "ior_b", B_RANGE),
+            (shikki_material_set_ior_b, -0.1, "ior_b", B_RANGE),
+            (shikki_material_set_ior_a, 11.0, "ior_a", A_RANGE),
+            (shikki_material_set_ior_a, 0.5, "ior_a", A_RANGE),
+        ];
+        for (setter, value, field, range) in cases {
+            assert_eq!(
+                setter(handle, value),
+                ShikkiStatus::InvalidArgument,
+                "{field} = {value}"
+            );
+            // The setter refuses the value itself, naming the field and its range (1e308 used to
+            // pass here and fail at render as a NaN Fresnel table that named neither).
+            let message = last_error();
+            assert!(
+                message.contains(&format!("invalid {field} = ")) && message.contains(range),
+                "{field} = {value}: `{message}`"
+            );
+        }
+        let material = handles::read::<_, LacquerMaterial>(handle).expect("the handle is live");
+        assert_eq!(
+            material,
+            LacquerMaterial::default(),
+            "a refused value changes nothing"
+        );
+        assert_eq!(shikki_material_set_ior_b(handle, 0.02), ShikkiStatus::Ok);
+        assert_eq!(shikki_material_destroy(handle), ShikkiStatus::Ok);
+    }
 }

@@ -6,6 +6,7 @@ use std::ffi::c_char;
 use std::path::Path;
 use std::sync::Arc;
 
+use shikki::environment::gpu::{MIN_SOURCE_HEIGHT, MIN_SOURCE_WIDTH};
 use shikki::environment::load::{MAX_PIXELS, MAX_SIDE};
 use shikki::environment::{load_environment, Equirect, LoadedEnvironment};
 use shikki::raster::mesh_io::{angle_weighted_normals, load_mesh, MAX_TRIANGLES, MAX_VERTICES};
@@ -43,7 +44,8 @@ pub unsafe extern "C" fn shikki_environment_load(
 
 /// Makes an environment from linear RGB radiance, `width × height` pixels, row 0 at the top
 /// (+Y), 3 floats per pixel (SPEC §4 mapping). The data is copied. Limits (checked before `rgb`
-/// is read): each side 1 to 32768, at most 2^28 pixels.
+/// is read): width 2 to 32768, height 1 to 32768 (at least 2 × 1 pixels, the smallest map the
+/// renderer's prefilter takes), at most 2^28 pixels.
 ///
 /// # Safety
 /// `rgb` is valid for reads of `width * height * 3` floats; `out` is valid for one write.
@@ -58,11 +60,18 @@ pub unsafe extern "C" fn shikki_environment_create_rgb(
         check_out(out, "out")?;
         // Checked against the file loader's limits before `rgb` is touched: a made-up size must
         // not send us reading gigabytes past the caller's array.
+        // The least size is the prefilter's: refused here, or every render with this handle
+        // would fail on it.
         let (w, h) = (width as usize, height as usize);
-        if !(1..=MAX_SIDE).contains(&w) || !(1..=MAX_SIDE).contains(&h) || w * h > MAX_PIXELS {
+        let (min_w, min_h) = (MIN_SOURCE_WIDTH as usize, MIN_SOURCE_HEIGHT as usize);
+        if !(min_w..=MAX_SIDE).contains(&w)
+            || !(min_h..=MAX_SIDE).contains(&h)
+            || w * h > MAX_PIXELS
+        {
             return Err(FfiError::invalid(format!(
-                "environment size {width}×{height}: each side must be 1 to {MAX_SIDE} pixels and \
-                 the whole at most {MAX_PIXELS} pixels (2^28); downscale the map"
+                "environment size {width}×{height}: the width must be {min_w} to {MAX_SIDE} \
+                 pixels, the height {min_h} to {MAX_SIDE}, and the whole at most {MAX_PIXELS} \
+                 pixels (2^28); downscale (or repeat) the map"
             )));
         }
         let count = w * h * 3;
@@ -236,4 +245,46 @@ pub unsafe extern "C" fn shikki_mesh_counts(
 #[no_mangle]
 pub extern "C" fn shikki_mesh_destroy(mesh: ShikkiMesh) -> ShikkiStatus {
     ffi_boundary!({ handles::remove(mesh) })
+}
+
+#[cfg(test)]
+mod tests {
+    use std::ffi::CStr;
+
+    use super::*;
+    use crate::boundary::last_error_ptr;
+
+    fn last_error() -> String {
+        // SAFETY: last_error_ptr points to this thread's NUL-terminated message.
+        unsafe { CStr::from_ptr(last_error_ptr()) }
+            .to_string_lossy()
+            .into_owned()
+    }
+
+    #[test]
+    fn create_rgb_refuses_maps_smaller_than_the_prefilter_takes() {
+        let _turn = handles::test_table_turn();
+        let pixels = [0.5_f32; 6];
+        let mut environment = ShikkiEnvironment { id: 0 };
+        for (width, height) in [(1, 1), (1, 2), (2, 0)] {
+            // SAFETY: `pixels` holds width × height × 3 floats for each size tried (at most 6);
+            // `environment` is valid for one write.
+            let status = unsafe {
+                shikki_environment_create_rgb(width, height, pixels.as_ptr(), &mut environment)
+            };
+            assert_eq!(status, ShikkiStatus::InvalidArgument, "{width}×{height}");
+            let message = last_error();
+            assert!(
+                message.contains(&format!("environment size {width}×{height}"))
+                    && message.contains("the width must be 2 to 32768 pixels, the height 1 to"),
+                "{message}"
+            );
+            assert_eq!(environment.id, 0, "no handle is written on error");
+        }
+        // SAFETY: as above, 2 × 1 × 3 = 6 floats.
+        let status =
+            unsafe { shikki_environment_create_rgb(2, 1, pixels.as_ptr(), &mut environment) };
+        assert_eq!(status, ShikkiStatus::Ok, "{}", last_error());
+        assert_eq!(shikki_environment_destroy(environment), ShikkiStatus::Ok);
+    }
 }

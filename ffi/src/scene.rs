@@ -147,14 +147,31 @@ pub unsafe extern "C" fn shikki_scene_add_object(
 }
 
 fn add_light(scene: ShikkiScene, light: Light) -> FfiResult {
-    light.validate()?;
+    add_lights(scene, vec![light])
+}
+
+/// Adds every one of `lights` or, on error, none: each is validated and the room for all of them
+/// is checked under one lock before the first is pushed (adding the default rig one light at a
+/// time to a scene with 15 once added one light and then failed).
+fn add_lights(scene: ShikkiScene, lights: Vec<Light>) -> FfiResult {
+    for light in &lights {
+        light.validate()?;
+    }
     with_scene(scene, |state| {
-        if state.lights.len() >= MAX_LIGHTS {
-            return Err(FfiError::invalid(format!(
-                "the scene already has {MAX_LIGHTS} lights, the most one draw takes"
-            )));
+        let (have, adding) = (state.lights.len(), lights.len());
+        if have + adding > MAX_LIGHTS {
+            let message = match adding {
+                1 => format!("the scene already has {have} lights, the most one draw takes"),
+                _ => format!(
+                    "the scene has {have} lights and {adding} more would make {}, above \
+                     {MAX_LIGHTS}, the most one draw takes; nothing was added (remove lights \
+                     with shikki_scene_clear_lights first)",
+                    have + adding
+                ),
+            };
+            return Err(FfiError::invalid(message));
         }
-        state.lights.push(light);
+        state.lights.extend(lights);
         Ok(())
     })
 }
@@ -215,14 +232,12 @@ pub unsafe extern "C" fn shikki_scene_add_point_light(
     })
 }
 
-/// Adds shikki's default three-light rig (the CLI's, when no light is given).
+/// Adds shikki's default three-light rig (the CLI's, when no light is given): all three, or
+/// none where the scene has no room for three more (then SHIKKI_STATUS_INVALID_ARGUMENT and the
+/// scene is unchanged).
 #[no_mangle]
 pub extern "C" fn shikki_scene_add_default_lights(scene: ShikkiScene) -> ShikkiStatus {
-    ffi_boundary!({
-        default_lights()
-            .into_iter()
-            .try_for_each(|light| add_light(scene, light))
-    })
+    ffi_boundary!({ add_lights(scene, default_lights()) })
 }
 
 /// Removes every light.
@@ -591,4 +606,59 @@ pub unsafe extern "C" fn shikki_scene_get_output(
         }
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use std::ffi::CStr;
+
+    use super::*;
+    use crate::boundary::last_error_ptr;
+
+    fn last_error() -> String {
+        // SAFETY: last_error_ptr points to this thread's NUL-terminated message.
+        unsafe { CStr::from_ptr(last_error_ptr()) }
+            .to_string_lossy()
+            .into_owned()
+    }
+
+    fn light_count(scene: ShikkiScene) -> usize {
+        with_scene(scene, |state| Ok(state.lights.len())).expect("the scene handle is live")
+    }
+
+    #[test]
+    fn default_lights_are_added_all_three_or_none() {
+        let _turn = handles::test_table_turn();
+        let mut scene = ShikkiScene { id: 0 };
+        // SAFETY: `scene` is valid for one write.
+        assert_eq!(unsafe { shikki_scene_create(&mut scene) }, ShikkiStatus::Ok);
+        let light = Light::Point {
+            position: DVec3::new(0.0, 2.0, 0.0),
+            intensity: DVec3::ONE,
+        };
+        let fill = MAX_LIGHTS - 1;
+        for _ in 0..fill {
+            add_light(scene, light).expect("room for one more light");
+        }
+        assert_eq!(
+            shikki_scene_add_default_lights(scene),
+            ShikkiStatus::InvalidArgument
+        );
+        let message = last_error();
+        assert!(
+            message.contains(&format!("has {fill} lights and 3 more would make")),
+            "{message}"
+        );
+        assert!(message.contains("nothing was added"), "{message}");
+        assert_eq!(light_count(scene), fill, "a refused rig adds no light");
+
+        // With room for exactly three the rig goes in whole.
+        assert_eq!(shikki_scene_clear_lights(scene), ShikkiStatus::Ok);
+        for _ in 0..MAX_LIGHTS - 3 {
+            add_light(scene, light).expect("room for one more light");
+        }
+        assert_eq!(shikki_scene_add_default_lights(scene), ShikkiStatus::Ok);
+        assert_eq!(light_count(scene), MAX_LIGHTS);
+        assert_eq!(shikki_scene_destroy(scene), ShikkiStatus::Ok);
+    }
 }

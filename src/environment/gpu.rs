@@ -34,6 +34,14 @@ mod upload;
 
 use run::PrefilterRun;
 
+/// The smallest equirectangular source the prefilter takes, in pixels: [`MIN_SOURCE_WIDTH`] ×
+/// [`MIN_SOURCE_HEIGHT`]. The C API holds caller arrays to it when an environment is made
+/// (`shikki_environment_create_rgb`), so a map no render can draw is refused there, once, and
+/// not by every render that uses it.
+pub const MIN_SOURCE_WIDTH: u32 = 2;
+/// See [`MIN_SOURCE_WIDTH`].
+pub const MIN_SOURCE_HEIGHT: u32 = 1;
+
 /// Steps 2–4 read the cube they gather from as a texel buffer and write a storage buffer.
 const TEXEL_IO_BINDINGS: [Binding; 2] = [
     Binding::new(PREFILTER_SOURCE_BINDING, BindingKind::UniformTexelBuffer),
@@ -670,11 +678,11 @@ fn check_device_limits(
 }
 
 fn check_source(source: &Equirect, intensity: f64, rotation_deg: f64) -> Result<()> {
-    if source.width < 2 || source.height < 1 {
+    if source.width < MIN_SOURCE_WIDTH || source.height < MIN_SOURCE_HEIGHT {
         return Err(Error::invalid(
             "environment size",
             format!("{}x{}", source.width, source.height),
-            "must be at least 2x1 pixels",
+            format!("must be at least {MIN_SOURCE_WIDTH}x{MIN_SOURCE_HEIGHT} pixels"),
         ));
     }
     if source.pixels.len() != (source.width as usize) * (source.height as usize) {

@@ -25,6 +25,15 @@ pub const DEFAULT_IOR_A: f64 = 1.5;
 /// See [`DEFAULT_IOR_A`].
 pub const DEFAULT_IOR_B: f64 = 0.0045;
 
+/// The largest A of n(λ) = A + B/λ². Real lacquers and glasses have A ≈ 1.4–1.9 (diamond 2.4);
+/// 10 leaves room for anything a user may try while keeping n finite. A ≥ 1 is the lower bound
+/// (lacquer is denser than air).
+pub const MAX_IOR_A: f64 = 10.0;
+/// The largest B of n(λ) = A + B/λ² [µm²]. Real lacquers and glasses have B ≤ 0.02 µm²; at 1 µm²
+/// n(380 nm) ≤ 10 + 1/0.38² ≈ 17 stays finite. B = 1e308 made n infinite and every table entry
+/// NaN, an error that named neither B nor its range. B ≥ 0 (normal dispersion) is the lower bound.
+pub const MAX_IOR_B: f64 = 1.0;
+
 /// The spectral range a spectral table must cover [nm] (SPEC §3: "covering 380–780 nm").
 const SPECTRAL_COVER_NM: (f64, f64) = (380.0, 780.0);
 
@@ -235,10 +244,19 @@ fn parse_header(line: &str, source: &str) -> Result<Header> {
     }
     let mut nm = Vec::with_capacity(cells.len() - 1);
     for (column, cell) in cells.iter().enumerate().skip(1) {
+        let n = column + 1;
         match cell.parse::<f64>() {
-            Ok(v) if v.is_finite() => nm.push(v),
+            Ok(v) if v.is_finite() && v > 0.0 => nm.push(v),
+            // A wavelength of 0 or less has no light; -380 used to pass as covering 380 nm.
+            Ok(v) if v.is_finite() => {
+                return fail(format!(
+                    "wrong header: column {n} `{cell}` is not a wavelength: wavelengths are \
+                     lengths in nm, greater than 0 (the table covers {lo}–{hi} nm)",
+                    lo = SPECTRAL_COVER_NM.0,
+                    hi = SPECTRAL_COVER_NM.1
+                ));
+            }
             _ => {
-                let n = column + 1;
                 return fail(format!(
                     "wrong header: column {n} `{cell}` is not a wavelength in nm; {EXPECTED_HEADER}"
                 ));
@@ -324,18 +342,20 @@ fn check_next_angle(angle: f64, previous: Option<f64>) -> std::result::Result<()
     }
 }
 
-/// The IOR law's parameter ranges: A ≥ 1 keeps n ≥ 1 (air → lacquer, no total internal
-/// reflection); B ≥ 0 is normal dispersion.
+/// The IOR law's parameter ranges: A in [1, [`MAX_IOR_A`]] (A ≥ 1 keeps n ≥ 1: air → lacquer,
+/// no total internal reflection) and B in [0, [`MAX_IOR_B`]] µm² (B ≥ 0 is normal dispersion).
 pub(crate) fn check_ior(ior_a: f64, ior_b: f64) -> Result<()> {
-    if !(ior_a.is_finite() && ior_a >= 1.0) {
+    if !(ior_a.is_finite() && (1.0..=MAX_IOR_A).contains(&ior_a)) {
         let reason = format!(
-            "must be a finite number >= 1 (lacquer is denser than air; default {DEFAULT_IOR_A})"
+            "must be a finite number in [1, {MAX_IOR_A}] (A >= 1: lacquer is denser than air; \
+             real lacquers and glasses have A ≈ 1.4–1.9; default {DEFAULT_IOR_A})"
         );
         return Err(Error::invalid("ior_a", ior_a, reason));
     }
-    if !(ior_b.is_finite() && ior_b >= 0.0) {
+    if !(ior_b.is_finite() && (0.0..=MAX_IOR_B).contains(&ior_b)) {
         let reason = format!(
-            "must be a finite number >= 0 in µm² (normal dispersion; default {DEFAULT_IOR_B})"
+            "must be a finite number in [0, {MAX_IOR_B}] µm² (B >= 0: normal dispersion; real \
+             lacquers and glasses have B ≤ 0.02 µm²; default {DEFAULT_IOR_B})"
         );
         return Err(Error::invalid("ior_b", ior_b, reason));
     }
@@ -480,21 +500,67 @@ mod tests {
 
     #[test]
     fn dielectric_rejects_bad_ior() {
-        for (a, b, field) in [
-            (0.9, 0.0, "ior_a"),
-            (f64::NAN, 0.0, "ior_a"),
-            (1.5, -0.1, "ior_b"),
-            (1.5, f64::INFINITY, "ior_b"),
+        for (a, b, field, range) in [
+            (0.9, 0.0, "ior_a", "[1, 10]"),
+            (f64::NAN, 0.0, "ior_a", "[1, 10]"),
+            (10.5, 0.0, "ior_a", "[1, 10]"),
+            (1e308, 0.0, "ior_a", "[1, 10]"),
+            (1.5, -0.1, "ior_b", "[0, 1] µm²"),
+            (1.5, f64::INFINITY, "ior_b", "[0, 1] µm²"),
+            (1.5, 1.5, "ior_b", "[0, 1] µm²"),
+            (1.5, 1e308, "ior_b", "[0, 1] µm²"),
         ] {
             match FresnelTable::dielectric(a, b) {
                 Err(Error::InvalidParameter {
                     field: f, reason, ..
                 }) => {
                     assert_eq!(f, field);
-                    assert!(reason.contains(">="), "{reason}");
+                    assert!(reason.contains(range), "{reason}");
                 }
                 other => panic!("({a}, {b}): {other:?}"),
             }
+        }
+    }
+
+    #[test]
+    fn dielectric_table_is_finite_at_the_ior_bounds() {
+        // The largest A and B still give a table of reflectances (n ≈ 17 at 380 nm), so the
+        // bounds, not a NaN entry, are what refuses a larger value.
+        for (a, b) in [(1.0, 0.0), (MAX_IOR_A, MAX_IOR_B), (1.0, MAX_IOR_B)] {
+            let table = FresnelTable::dielectric(a, b).expect("the bounds are valid");
+            assert!(
+                table.rgb().iter().flatten().all(|c| c.is_finite()),
+                "({a}, {b})"
+            );
+        }
+    }
+
+    #[test]
+    fn spectral_header_refuses_wavelengths_not_above_zero() {
+        // -380 < 580 < 780 used to pass as covering 380–780 nm.
+        for (header, column, cell) in [
+            ("angle_deg,-380,580,780", 2, "-380"),
+            ("angle_deg,0,580,780", 2, "0"),
+            ("angle_deg,-0,580,780", 2, "-0"),
+            ("angle_deg,-800,-400,380,780", 2, "-800"),
+        ] {
+            let text = format!("{header}\n0,0,0,0\n90,1,1,1\n");
+            let (line, message) = csv_error(&text);
+            assert_eq!(line, 1, "{header}: {message}");
+            assert!(
+                message.contains(&format!("column {column} `{cell}` is not a wavelength"))
+                    && message.contains("greater than 0"),
+                "{header}: {message}"
+            );
+        }
+        for header in ["angle_deg,380,inf,780", "angle_deg,NaN,580,780"] {
+            let text = format!("{header}\n0,0,0,0\n90,1,1,1\n");
+            let (line, message) = csv_error(&text);
+            assert_eq!(line, 1, "{header}: {message}");
+            assert!(
+                message.contains("is not a wavelength in nm"),
+                "{header}: {message}"
+            );
         }
     }
 

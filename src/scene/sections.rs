@@ -17,6 +17,11 @@ use crate::raster::draw::{MAX_BOUNCES, MAX_RAYS};
 use crate::raster::lights::Light;
 use crate::Result;
 
+/// The keys of a directional light besides `kind`.
+const DIR_KEYS: &[&str] = &["to_light", "irradiance"];
+/// The keys of a point light besides `kind`.
+const POINT_KEYS: &[&str] = &["position", "intensity"];
+
 /// `[[light]]`: `kind = "dir"` (to_light, irradiance) or `"point"` (position, intensity).
 pub(super) fn light(node: &Node) -> Result<Light> {
     let entries = table(node, "[[light]]", LIGHT_KEYS)?;
@@ -27,7 +32,25 @@ pub(super) fn light(node: &Node) -> Result<Light> {
         _ => number(n, key).map(DVec3::splat),
     };
     let kind = get("kind").map(|n| string(n, "kind")).transpose()?;
-    let light = match kind.unwrap_or("dir") {
+    let kind = kind.unwrap_or("dir");
+    // A key of the other kind was ignored, so a light written as one kind with the other's keys
+    // drew with values the author never wrote (or failed on a missing key without saying why).
+    let (takes, other_kind, other_keys) = match kind {
+        "dir" | "directional" => ("`to_light` and `irradiance`", "point", POINT_KEYS),
+        "point" => ("`position` and `intensity`", "dir", DIR_KEYS),
+        _ => ("", "", &[][..]),
+    };
+    if let Some(e) = entries
+        .iter()
+        .find(|e| other_keys.contains(&e.key.as_str()))
+    {
+        return Err(e.key_at.error(format!(
+            "`{}` is a key of a {other_kind:?} light, and this light's kind is {kind:?}, which \
+             takes {takes}; remove `{}`, or write kind = {other_kind:?}",
+            e.key, e.key
+        )));
+    }
+    let light = match kind {
         "dir" | "directional" => {
             let to = get("to_light").ok_or_else(|| missing("to_light", "dir"))?;
             let e = get("irradiance").ok_or_else(|| missing("irradiance", "dir"))?;
@@ -79,10 +102,18 @@ pub(super) fn environment(node: &Node) -> Result<EnvironmentSpec> {
             .at
             .error(format!("`intensity` must be ≥ 0, found {intensity}")));
     }
+    let light = EnvironmentLight {
+        intensity,
+        rotation_deg,
+    };
+    // docs/scene.md: `source` defaults to builtin:studio, as a scene without the section does;
+    // so `[environment]` with only `intensity` (or `--set environment.intensity=…` on a scene
+    // without the section, which creates that table) dims the studio.
     let Some(source) = source else {
-        return Err(node.at.error(
-            "[environment] needs `source`: \"builtin:studio\", a .hdr/.exr path, or \"none\"",
-        ));
+        return Ok(EnvironmentSpec::Map {
+            source: EnvironmentSource::Named(BUILTIN_STUDIO.to_string()),
+            light,
+        });
     };
     let spec = string(source, "source")?;
     if spec.eq_ignore_ascii_case("none") {
@@ -109,10 +140,7 @@ pub(super) fn environment(node: &Node) -> Result<EnvironmentSpec> {
     };
     Ok(EnvironmentSpec::Map {
         source: EnvironmentSource::Named(resolved),
-        light: EnvironmentLight {
-            intensity,
-            rotation_deg,
-        },
+        light,
     })
 }
 
@@ -217,4 +245,122 @@ pub(super) fn output(node: &Node) -> Result<OutputSpec> {
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+    use crate::scene::{Scene, SceneDocument};
+    use crate::Error;
+
+    fn build(text: &str) -> Result<Scene> {
+        SceneDocument::parse(text, "test.toml", Path::new(""))?.build()
+    }
+
+    /// The line and message of a scene that must fail to build.
+    fn parse_error(text: &str) -> (usize, String) {
+        match build(text) {
+            Err(Error::Parse { line, message, .. }) => (line, message),
+            Err(other) => panic!("expected a parse error for {text:?}, got {other}"),
+            Ok(_) => panic!("expected a parse error for {text:?}, got a scene"),
+        }
+    }
+
+    fn studio(intensity: f64, rotation_deg: f64) -> EnvironmentSpec {
+        EnvironmentSpec::Map {
+            source: EnvironmentSource::Named(BUILTIN_STUDIO.to_string()),
+            light: EnvironmentLight {
+                intensity,
+                rotation_deg,
+            },
+        }
+    }
+
+    #[test]
+    fn environment_table_without_source_is_the_studio() {
+        // docs/scene.md: `source` defaults to builtin:studio, like a scene without the section.
+        let scene = build("[environment]\nintensity = 0.5\nrotation_deg = 30\n")
+            .expect("[environment] without source builds");
+        assert_eq!(scene.environment, studio(0.5, 30.0));
+        let scene = build("[environment]\n").expect("an empty [environment] builds");
+        assert_eq!(scene.environment, studio(1.0, 0.0));
+    }
+
+    #[test]
+    fn set_environment_intensity_without_the_section_dims_the_studio() {
+        let mut document = SceneDocument::parse("", "test.toml", Path::new("")).expect("parses");
+        assert_eq!(
+            document.build().expect("builds").environment,
+            studio(1.0, 0.0)
+        );
+        document
+            .set("environment.intensity=0.5", Path::new(""))
+            .expect("--set applies");
+        assert_eq!(
+            document.build().expect("builds").environment,
+            studio(0.5, 0.0)
+        );
+    }
+
+    #[test]
+    fn keys_of_the_other_light_kind_are_refused_at_their_line() {
+        let cases = [
+            (
+                "[[light]]\nkind = \"dir\"\nto_light = [0, 1, 0]\nirradiance = 1\nintensity = 2\n",
+                5,
+                "`intensity` is a key of a \"point\" light, and this light's kind is \"dir\", \
+                 which takes `to_light` and `irradiance`",
+            ),
+            (
+                // No kind is "dir" (docs/scene.md).
+                "[[light]]\nposition = [0, 1, 0]\nto_light = [0, 1, 0]\nirradiance = 1\n",
+                2,
+                "`position` is a key of a \"point\" light",
+            ),
+            (
+                "[[light]]\nkind = \"point\"\nposition = [0, 2, 0]\nintensity = 1\n\
+                 to_light = [0, 1, 0]\n",
+                5,
+                "`to_light` is a key of a \"dir\" light, and this light's kind is \"point\", \
+                 which takes `position` and `intensity`; remove `to_light`, or write kind = \"dir\"",
+            ),
+            (
+                "[[light]]\nkind = \"point\"\nirradiance = [1, 1, 1]\nposition = [0, 2, 0]\n",
+                3,
+                "`irradiance` is a key of a \"dir\" light",
+            ),
+        ];
+        for (text, line, needle) in cases {
+            let (got_line, message) = parse_error(text);
+            assert_eq!(got_line, line, "{text:?}: {message}");
+            assert!(
+                message.contains(needle),
+                "{text:?}: `{message}` lacks `{needle}`"
+            );
+        }
+    }
+
+    #[test]
+    fn lights_with_their_own_keys_still_build() {
+        let scene = build(
+            "[[light]]\nkind = \"dir\"\nto_light = [0, 2, 0]\nirradiance = 1\n\n\
+             [[light]]\nkind = \"point\"\nposition = [0, 2, 0]\nintensity = [1, 2, 3]\n",
+        )
+        .expect("both lights build");
+        assert_eq!(
+            scene.lights,
+            vec![
+                Light::Directional {
+                    to_light: DVec3::Y,
+                    irradiance: DVec3::ONE,
+                },
+                Light::Point {
+                    position: DVec3::new(0.0, 2.0, 0.0),
+                    intensity: DVec3::new(1.0, 2.0, 3.0),
+                },
+            ]
+        );
+    }
 }

@@ -158,6 +158,13 @@ impl<'a, R: BufRead> ObjFilter<'a, R> {
             let raw = std::mem::take(&mut self.raw);
             let text = std::str::from_utf8(&raw)
                 .map_err(|_| self.parse_error("line is not valid UTF-8 text"))?;
+            // Editors on Windows start UTF-8 files with a byte-order mark. Left in, it glues onto
+            // the first keyword ("\u{feff}v"), which no keyword matches: the first vertex was
+            // dropped and every face index after it pointed one vertex off.
+            let text = match self.line {
+                1 => text.strip_prefix('\u{feff}').unwrap_or(text),
+                _ => text,
+            };
             let canonical = self.check_line(text)?;
             self.raw = raw;
             if let Some(canonical) = canonical {
@@ -323,5 +330,42 @@ impl<R: BufRead> BufRead for ObjFilter<'_, R> {
 
     fn consume(&mut self, amount: usize) {
         self.out_pos = (self.out_pos + amount).min(self.out.len());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Loads `text` as an OBJ file written to a temporary directory.
+    fn load_text(text: &str) -> Result<(Mesh, LoadReport)> {
+        let dir = tempfile::tempdir().expect("a temporary directory");
+        let path = dir.path().join("bom.obj");
+        std::fs::write(&path, text).expect("the test file is written");
+        load(&path)
+    }
+
+    #[test]
+    fn leading_utf8_bom_keeps_the_first_vertex() {
+        let (mesh, _) = load_text("\u{feff}v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+            .expect("an OBJ file with a BOM loads");
+        assert_eq!(mesh.indices.len(), 3);
+        let mut positions = mesh.positions.clone();
+        positions.sort_by(|a, b| a.partial_cmp(b).expect("finite positions"));
+        assert_eq!(
+            positions,
+            vec![[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]
+        );
+    }
+
+    #[test]
+    fn bom_on_a_later_line_is_not_a_keyword() {
+        // Only the file's first bytes may be a BOM; elsewhere U+FEFF is content, so the vertex
+        // it starts is not one and face index 3 is out of range.
+        let error = load_text("v 0 0 0\nv 1 0 0\n\u{feff}v 0 1 0\nf 1 2 3\n")
+            .expect_err("a BOM inside the file is not skipped")
+            .to_string();
+        assert!(error.contains("bom.obj:4: "), "{error}");
+        assert!(error.contains("vertex index 3 is out of range"), "{error}");
     }
 }
