@@ -368,7 +368,9 @@ enum ShikkiStatus shikki_render_rgba32f(struct ShikkiRenderer renderer, struct S
 enum ShikkiStatus shikki_render_rgba8(struct ShikkiRenderer renderer, struct ShikkiScene scene, uint8_t *rgba, size_t len);
 
 // Renders and writes `path`: `.png` (the scene's exposure and tone curve) or `.exr` (linear).
-// The file is written atomically; on failure no file is left at `path`.
+// The file is written atomically. A `path` that is refused (another extension, a directory, a
+// missing directory, a name over 255 bytes, a device) is left alone; any later failure leaves
+// no file at `path` (an earlier one there is removed, and the message says so).
 //
 // # Safety
 // `path` is a NUL-terminated UTF-8 string.
@@ -376,7 +378,9 @@ enum ShikkiStatus shikki_render_to_file(struct ShikkiRenderer renderer, struct S
 
 // Writes a caller's RGBA32F image (linear, premultiplied, row 0 at the top; `len` = width ×
 // height × 4 floats) as `.png` (exposure, tone curve) or `.exr` (linear) — the encoder
-// `shikki_render_to_file` uses.
+// `shikki_render_to_file` uses. Invalid arguments (the size, `len`, a NaN or infinite pixel or
+// exposure, the tone curve, the path's extension) are SHIKKI_STATUS_INVALID_ARGUMENT and leave
+// `path` as it was; a failure while writing leaves no file at `path`.
 //
 // # Safety
 // `rgba` is valid for reads of `len` floats; `path` is a NUL-terminated UTF-8 string.

@@ -55,7 +55,7 @@ impl Error {
     ) -> Self {
         Error::InvalidParameter {
             field: field.into(),
-            value: value.to_string(),
+            value: compact_number(value.to_string()),
             reason: reason.into(),
         }
     }
@@ -67,6 +67,24 @@ impl Error {
             line,
             message: message.into(),
         }
+    }
+}
+
+/// A number as an error message shows it: plain where that is short, else in scientific notation
+/// (f64's `Display` writes 1e-300 with 300 digits).
+pub fn show_number(x: f64) -> String {
+    let plain = x.to_string();
+    match plain.len() > 16 && x.is_finite() {
+        true => format!("{x:e}"),
+        false => plain,
+    }
+}
+
+/// `value` as [`show_number`] writes it where it is one long number, else unchanged.
+fn compact_number(value: String) -> String {
+    match value.parse::<f64>() {
+        Ok(x) if value.len() > 16 => show_number(x),
+        _ => value,
     }
 }
 

@@ -35,6 +35,14 @@ impl From<shikki::Error> for FfiError {
         let status = match &error {
             shikki::Error::InvalidParameter { .. } => ShikkiStatus::InvalidArgument,
             shikki::Error::Parse { .. } => ShikkiStatus::ParseError,
+            // A file read whole whose content is wrong at no particular line (an empty OBJ, a
+            // truncated GLB, invalid glTF): malformed input, as the header says, not an I/O
+            // failure.
+            shikki::Error::Read { source, .. }
+                if source.kind() == std::io::ErrorKind::InvalidData =>
+            {
+                ShikkiStatus::ParseError
+            }
             shikki::Error::Read { .. } | shikki::Error::Write { .. } => ShikkiStatus::IoError,
             shikki::Error::Gpu(_) => ShikkiStatus::GpuError,
             shikki::Error::Internal(_) => ShikkiStatus::Internal,

@@ -109,6 +109,9 @@ pub unsafe extern "C" fn shikki_renderer_create(
 ) -> ShikkiStatus {
     ffi_boundary!({
         check_out(out, "out")?;
+        if let Some(problem) = ContextOptions::ray_tracing_env_problem() {
+            return Err(problem.into());
+        }
         let ray_tracing = ContextOptions::ray_tracing_by_env();
         let context = if options.is_null() {
             ContextOptions {
@@ -322,7 +325,9 @@ pub unsafe extern "C" fn shikki_render_rgba8(
 }
 
 /// Renders and writes `path`: `.png` (the scene's exposure and tone curve) or `.exr` (linear).
-/// The file is written atomically; on failure no file is left at `path`.
+/// The file is written atomically. A `path` that is refused (another extension, a directory, a
+/// missing directory, a name over 255 bytes, a device) is left alone; any later failure leaves
+/// no file at `path` (an earlier one there is removed, and the message says so).
 ///
 /// # Safety
 /// `path` is a NUL-terminated UTF-8 string.
@@ -336,20 +341,34 @@ pub unsafe extern "C" fn shikki_render_to_file(
         // SAFETY: the caller's contract above.
         let path = Path::new(unsafe { c_str(path, "path") }?);
         output::preflight_output(path)?;
-        let scene = snapshot(scene)?;
-        let image = render_snapshot(renderer, &scene)?;
-        let settings = PngSettings {
-            exposure_ev: scene.output.exposure_ev,
-            tone_curve: scene.output.tone_curve,
-        };
-        output::write_image(path, &image, &settings)?;
-        Ok(())
+        let written = snapshot(scene).and_then(|scene| {
+            let image = render_snapshot(renderer, &scene)?;
+            let settings = PngSettings {
+                exposure_ev: scene.output.exposure_ev,
+                tone_curve: scene.output.tone_curve,
+            };
+            Ok(output::write_image(path, &image, &settings)?)
+        });
+        // The path is one this call writes (checked above): an earlier file there would pass
+        // for this call's output, so any failure from here on removes it and says so.
+        written.map_err(|mut error| {
+            if let Ok(true) = output::atomic::discard_stale_output(path) {
+                error.message.push_str(&format!(
+                    "; the previous {} was removed so it cannot be mistaken for this call's \
+                     output",
+                    path.display()
+                ));
+            }
+            error
+        })
     })
 }
 
 /// Writes a caller's RGBA32F image (linear, premultiplied, row 0 at the top; `len` = width ×
 /// height × 4 floats) as `.png` (exposure, tone curve) or `.exr` (linear) — the encoder
-/// `shikki_render_to_file` uses.
+/// `shikki_render_to_file` uses. Invalid arguments (the size, `len`, a NaN or infinite pixel or
+/// exposure, the tone curve, the path's extension) are SHIKKI_STATUS_INVALID_ARGUMENT and leave
+/// `path` as it was; a failure while writing leaves no file at `path`.
 ///
 /// # Safety
 /// `rgba` is valid for reads of `len` floats; `path` is a NUL-terminated UTF-8 string.

@@ -8,6 +8,7 @@
 
 use glam::{DMat4, DVec3};
 use shikki::environment::{EnvironmentLight, EnvironmentSource};
+use shikki::model::limits;
 use shikki::model::LacquerMaterial;
 use shikki::output::ToneCurve;
 use shikki::raster::draw::{Background, MAX_BOUNCES, MAX_RAYS, SUPPORTED_SAMPLES};
@@ -121,16 +122,10 @@ pub unsafe extern "C" fn shikki_scene_add_object(
             // SAFETY: the caller's contract above.
             DMat4::from_cols_array(&unsafe { array::<f64, 16>(transform, "transform") }?)
         };
-        if !transform.is_finite() {
-            return Err(FfiError::invalid(
-                "transform has a non-finite element; every element must be a finite number",
-            ));
-        }
-        if transform.row(3) != glam::DVec4::W {
+        if let Some(reason) = limits::placement_problem(&transform) {
             return Err(FfiError::invalid(format!(
-                "transform's last row is {:?}: an object transform is affine, last row \
-                 (0, 0, 0, 1) (elements 3, 7, 11, 15 in column-major order)",
-                transform.row(3).to_array()
+                "transform cannot place an object: {reason} (the last row is elements 3, 7, 11, \
+                 15 in column-major order, the translation 12, 13, 14)"
             )));
         }
         let mesh = handles::read::<_, MeshObject>(mesh)?;
@@ -192,6 +187,9 @@ pub unsafe extern "C" fn shikki_scene_add_directional_light(
         let direction = vec3(unsafe { array(to_light, "to_light") }?);
         // SAFETY: the caller's contract above.
         let irradiance = vec3(unsafe { array(irradiance, "irradiance") }?);
+        if let Some(reason) = limits::coordinate_problem(direction) {
+            return Err(FfiError::invalid(format!("to_light {direction}: {reason}")));
+        }
         let to_light = direction.try_normalize().ok_or_else(|| {
             FfiError::invalid(format!(
                 "to_light {direction}: the direction must be finite and non-zero"
@@ -309,12 +307,14 @@ pub extern "C" fn shikki_scene_set_environment(
                 )));
             }
             let loaded = handles::read::<_, EnvironmentObject>(environment)?;
+            let light = EnvironmentLight {
+                intensity,
+                rotation_deg,
+            };
+            light.check_levels(&loaded.image, &loaded.source)?;
             EnvironmentSpec::Map {
                 source: EnvironmentSource::Loaded(loaded),
-                light: EnvironmentLight {
-                    intensity,
-                    rotation_deg,
-                },
+                light,
             }
         };
         with_scene(scene, |state| {

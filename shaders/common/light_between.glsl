@@ -154,7 +154,7 @@ vec4 light_between(LacquerParams p0, vec3 n0, vec3 v0, RaySurface surface0, uint
             vec3 side = dot(s, surface.geometric_normal) < 0.0 ? -surface.geometric_normal
                                                                  : surface.geometric_normal;
             vec3 origin = offset_ray_origin(surface.point, side);
-            RayHit hit = trace_nearest(origin, s, trace_mask(surface, origin, s));
+            RayHit hit = trace_nearest(origin, s, trace_mask(surface));
             if (!hit.hit) {
                 break;
             }

@@ -9,22 +9,19 @@
 #define RAY_SURFACE_GLSL
 
 // The point rays start from and the triangle's unit geometric normal, turned to the side of the
-// shading normal. The rest is for visibility.glsl's `trace_mask` only, a traversal shortcut that
-// changes no result and has no CPU twin: the surface's object (−1: none), the triangle's unit
-// winding normal n = (p1 − p0) × (p2 − p0) / |…|, its vertex p0, and a bound on the angle between
-// that f32 normal and the exact one.
+// shading normal. The rest is for visibility.glsl's `trace_mask`: the surface's object (−1:
+// none) and the triangle's unit winding normal n = (p1 − p0) × (p2 − p0) / |…|, whose side the
+// surface is shaded from tells which of its mesh's sides the rays leave.
 struct RaySurface {
     vec3 point;
     vec3 geometric_normal;
     int object;
     vec3 face_normal;
-    vec3 corner;
-    float tilt;
 };
 
 // A surface no ray leaves (the shading pass without ray tracing).
 RaySurface untraced_surface(vec3 point, vec3 normal) {
-    return RaySurface(point, normal, -1, normal, point, 2.0);
+    return RaySurface(point, normal, -1, normal);
 }
 
 #ifdef RAY_TRACING
@@ -80,11 +77,6 @@ RaySurface ray_surface_of(vec3 p[3], vec3 normal[3], vec3 position, vec3 n) {
     surface.geometric_normal = dot(ng, n) < 0.0 ? -ng : ng;
     surface.object = -1;
     surface.face_normal = ng;
-    surface.corner = p[0];
-    // The edges are exact to an ulp (differences of f32 values are correctly rounded); the cross
-    // product of edges at an angle θ then tilts by a few ulps / sin θ, and inversesqrt by 2 ulps.
-    // 2^-20 is 16 ulps of each.
-    surface.tilt = (1.0 / 1048576.0) * (1.0 + length(e1) * length(e2) * inversesqrt(area2));
     // Barycentrics of the point's projection onto the plane, clamped into the triangle.
     vec3 d = position - p[0];
     float b1 = dot(cross(d, e2), cross_e) / area2;

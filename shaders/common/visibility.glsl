@@ -42,26 +42,22 @@ vec3 offset_ray_origin(vec3 p, vec3 n) {
         abs(p.z) < 1.0 / 32.0 ? near_origin.z : moved.z);
 }
 
-// The instance mask of a ray from `origin` (near `surface`) along `direction`: every object, or
-// all but the surface's own where that mesh cannot be met again (raster/self_hits.rs). That
-// holds when its faces are clear on the side the ray leaves by, the ray rises above the face's
-// plane by more than the f32 normal's tilt (so it rises above the exact plane too), and the
-// origin lies above the exact plane by more than the slack the mesh's vertices may reach over it:
-// then every point of the ray lies above every point of the mesh, along the face's normal.
-// Measured in BENCHMARKS.md ("Rays that cannot meet their own mesh").
-uint trace_mask(RaySurface surface, vec3 origin, vec3 direction) {
+// The instance mask of a ray leaving `surface`: every object, or all but the surface's own where
+// its mesh is convex on the side the surface is shaded from (raster/self_hits.rs: every vertex on
+// or behind every face's plane, seen from that side). Such a mesh stands for a smooth convex
+// surface, which a ray leaving it never meets again, whatever its direction: a ray below the flat
+// face's plane but above the shading normal's horizon would otherwise enter the mesh and meet its
+// far side, and a lone sphere's silhouette and terminator would differ from the image without
+// ray tracing, which SPEC §6 says they equal. The CPU twin makes the same choice
+// (`oracle::shadows::RaySurface::own`).
+uint trace_mask(RaySurface surface) {
     if (surface.object < 0) {
         return TRACE_MASK_ALL;
     }
     ObjectGeometry own = object_geometry[surface.object];
-    float rise = dot(direction, surface.face_normal);
-    uint side = rise > 0.0 ? SELF_HITS_FRONT_CLEAR : SELF_HITS_BACK_CLEAR;
-    vec3 d = origin - surface.corner;
-    float height = rise > 0.0 ? dot(d, surface.face_normal) : -dot(d, surface.face_normal);
-    // The f32 height's error: the normal's tilt over |d|, and as much again for its rounding.
-    bool clear = (own.clear_sides & side) != 0u && abs(rise) > 2.0 * surface.tilt
-        && height > own.slack + 2.0 * surface.tilt * length(d);
-    return clear ? TRACE_MASK_ALL & ~own.own_mask : TRACE_MASK_ALL;
+    uint side = dot(surface.geometric_normal, surface.face_normal) > 0.0
+        ? SELF_HITS_FRONT_CLEAR : SELF_HITS_BACK_CLEAR;
+    return (own.clear_sides & side) != 0u ? TRACE_MASK_ALL & ~own.own_mask : TRACE_MASK_ALL;
 }
 
 // The nearest surface along origin + t·direction, t ≥ 0.
@@ -151,7 +147,7 @@ float light_visibility(RaySurface surface, vec4 light_vector) {
     bool directional = light_vector.w == 0.0;
     vec3 direction = directional ? normalize(light_vector.xyz) : to_light / distance;
     return unoccluded(origin, direction, directional ? RAY_FAR : distance,
-               trace_mask(surface, origin, direction))
+               trace_mask(surface))
         ? 1.0
         : 0.0;
 #else

@@ -139,7 +139,13 @@ fn lights_from(specs: &[String]) -> Result<Vec<Light>> {
 fn render(args: RenderArgs) -> Result<()> {
     let scene = scene_from_flags(&args);
     let preset = &args.material.preset;
-    scene_cmd::render_built_scene(scene, &args.output, |scene, device| {
+    // The map `--env` names, even if the scene fails to build: never written over or removed.
+    let inputs: Vec<_> = Some(&args.environment.env)
+        .filter(|env| !env.starts_with("builtin:") && env.as_str() != "none")
+        .map(std::path::PathBuf::from)
+        .into_iter()
+        .collect();
+    scene_cmd::render_built_scene(scene, &args.output, &inputs, |scene, device| {
         let out = &scene.output;
         format!(
             "{}x{}, {} sample(s), {preset} on {device}",
@@ -215,7 +221,51 @@ fn warn_replaced(loaded: &LoadedEnvironment) {
     }
 }
 
+/// `shikki prefilter`: its files in the output directory are this run's alone. A run that fails
+/// removes those of an earlier run (they would pass for its output), and one that succeeds the
+/// layers past its own K (a run at K = 17 then at K = 2 left layer_2 … layer_16 beside the new
+/// ones; found by a probe, 2026-12-06).
 fn prefilter(args: PrefilterArgs) -> Result<()> {
+    let result = prefilter_into(&args);
+    let keep = match &result {
+        Ok(layers) => *layers,
+        Err(_) => 0,
+    };
+    let mut stale = stale_prefilter_files(&args.output, keep);
+    if result.is_err() {
+        stale.extend(["irradiance.exr", "preview.png"].map(|f| args.output.join(f)));
+    }
+    for path in stale {
+        if let Ok(true) = output::atomic::discard_stale_output(&path) {
+            eprintln!(
+                "removed {} from an earlier run: it is not this run's output",
+                path.display()
+            );
+        }
+    }
+    result.map(|_| ())
+}
+
+/// `layer_K.exr` files in `dir` with K ≥ `keep`.
+fn stale_prefilter_files(dir: &std::path::Path, keep: usize) -> Vec<std::path::PathBuf> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    entries
+        .filter_map(|entry| entry.ok().map(|e| e.path()))
+        .filter(|path| {
+            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            let layer = name
+                .strip_prefix("layer_")
+                .and_then(|rest| rest.strip_suffix(".exr"))
+                .and_then(|k| k.parse::<usize>().ok());
+            layer.is_some_and(|k| k >= keep)
+        })
+        .collect()
+}
+
+/// The prefilter's work; the number of layers written.
+fn prefilter_into(args: &PrefilterArgs) -> Result<usize> {
     let loaded = load_environment(&args.env)?;
     warn_replaced(&loaded);
     let mut params = PrefilterParams::for_source_width(loaded.image.width);
@@ -226,6 +276,8 @@ fn prefilter(args: PrefilterArgs) -> Result<()> {
     params.beta_min = args.beta_min;
     params.beta_max = args.beta_max;
     params.validate()?;
+    let light = EnvironmentLight::new(args.intensity, args.rotation_deg);
+    light.check_levels(&loaded.image, &args.env)?;
     std::fs::create_dir_all(&args.output).map_err(|e| Error::Write {
         path: args.output.clone(),
         message: format!("cannot create the output directory: {e}"),
@@ -234,12 +286,7 @@ fn prefilter(args: PrefilterArgs) -> Result<()> {
     if args.face_size.is_none() {
         params.face_size = default_params(&gpu, loaded.image.width).face_size;
     }
-    let env = GpuPrefilter::new(&gpu)?.run(
-        &gpu,
-        &loaded.image,
-        &params,
-        EnvironmentLight::new(args.intensity, args.rotation_deg),
-    )?;
+    let env = GpuPrefilter::new(&gpu)?.run(&gpu, &loaded.image, &params, light)?;
     let cubes = env.read_back(&gpu)?;
     gpu.check_validation()?;
     let linear = PngSettings::default();
@@ -260,7 +307,7 @@ fn prefilter(args: PrefilterArgs) -> Result<()> {
         params.face_size,
         args.output.display()
     );
-    Ok(())
+    Ok(cubes.layers.len())
 }
 
 fn brdf(args: BrdfArgs) -> Result<()> {

@@ -32,6 +32,9 @@ pub(crate) fn open_gpu() -> crate::Result<CliGpu> {
 /// host memory with the ray-tracing pipeline enabled, traced or not (an H200 with driver 580:
 /// 360 against 216 MB peak for the default scene at 1024² without rays; BENCHMARKS.md).
 pub(crate) fn open_gpu_tracing(traces: bool) -> crate::Result<CliGpu> {
+    if let Some(problem) = crate::gpu::ContextOptions::ray_tracing_env_problem() {
+        return Err(problem);
+    }
     let mut options = crate::gpu::ContextOptions::from_env();
     if !traces {
         options.ray_tracing = crate::gpu::RayTracingChoice::Off;

@@ -10,9 +10,10 @@ use std::sync::Arc;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::args::{BatchArgs, RenderArgs};
+use crate::environment::EnvironmentSource;
 use crate::output::{self, OutputFormat, PngSettings};
 use crate::scene::batch::{self, BatchOptions, BatchPlan};
-use crate::scene::{default_scene, Scene, SceneDocument, SceneRenderer};
+use crate::scene::{default_scene, EnvironmentSpec, Scene, SceneDocument, SceneRenderer};
 use crate::{Error, Result};
 
 /// Whether `shikki render` was given no scene and nothing that describes one (mesh, preset,
@@ -45,37 +46,57 @@ pub fn render_default(args: &RenderArgs) -> Result<()> {
     scene.output.exposure_ev = args.exposure;
     scene.output.tone_curve = args.tonemap;
     args.apply_render_overrides(&mut scene.render);
-    render_built_scene(Ok(scene), &args.output, scene_summary)
+    render_built_scene(Ok(scene), &args.output, &[], scene_summary)
 }
 
 /// `shikki render SCENE.toml [--set path=value]… [-o FILE]`. `--set` paths are scene paths
 /// (`camera.fov_deg=30`, `object.0.material.r=2`, `material.preset=rough-red` for every object);
 /// with `[output] format = "exr"` and no `-o`, the file is shikki.exr.
 pub fn render_scene_file(scene_path: &Path, sets: &[String], output_path: &Path) -> Result<()> {
-    let result = scene_and_path(scene_path, sets, output_path)
-        .and_then(|(scene, path)| render_built_scene(Ok(scene), &path, scene_summary));
-    if result.is_err() {
-        // The scene may have failed before its output path (and format) was known.
-        for path in [output_path.to_path_buf(), output_path.with_extension("exr")] {
-            discard_stale(&path);
+    // The map the scene reads, known from the file even if the scene does not build.
+    let document = SceneDocument::load(scene_path);
+    let inputs: Vec<PathBuf> = document
+        .as_ref()
+        .ok()
+        .and_then(|d| d.environment_file())
+        .into_iter()
+        .collect();
+    let built = document.and_then(|document| scene_and_path(document, sets, output_path));
+    match built {
+        Ok((scene, path)) => {
+            let inputs = [inputs, environment_file(&scene).into_iter().collect()].concat();
+            render_built_scene(Ok(scene), &path, &inputs, scene_summary)
+        }
+        Err(error) => {
+            // The scene failed before its output path (and format) was known: with no `-o` an
+            // `[output] format = "exr"` scene writes shikki.exr.
+            let mut stale = vec![output_path.to_path_buf()];
+            if output_path == Path::new(DEFAULT_OUTPUT) {
+                stale.push(output_path.with_extension("exr"));
+            }
+            for path in stale {
+                discard_stale(&path, &inputs);
+            }
+            Err(error)
         }
     }
-    result
 }
 
+/// `-o`'s default.
+const DEFAULT_OUTPUT: &str = "shikki.png";
+
 fn scene_and_path(
-    scene_path: &Path,
+    mut document: SceneDocument,
     sets: &[String],
     output_path: &Path,
 ) -> Result<(Scene, PathBuf)> {
-    let mut document = SceneDocument::load(scene_path)?;
     for assignment in sets {
         document.set(assignment, Path::new(""))?;
     }
     let scene = document.build()?;
     let format = document.output_format()?;
     let mut path = output_path.to_path_buf();
-    if format == OutputFormat::Exr && path == Path::new("shikki.png") {
+    if format == OutputFormat::Exr && path == Path::new(DEFAULT_OUTPUT) {
         path.set_extension("exr");
     }
     Ok((scene, path))
@@ -95,20 +116,66 @@ fn scene_summary(scene: &Scene, device: &str) -> String {
 /// Renders `scene` (or reports why it could not be built) to `path`, format by extension, then
 /// prints `wrote PATH (summary)`. A failure leaves no file at `path`: a file there from an
 /// earlier run would pass for this run's result (batch users check for existence), so it is
-/// removed, and the CLI says so.
+/// removed, and the CLI says so. `inputs` are files the render reads (its environment map): one
+/// named as the output is refused before anything is rendered, and never removed.
 pub fn render_built_scene(
     scene: Result<Scene>,
     path: &Path,
+    inputs: &[PathBuf],
     summary: impl FnOnce(&Scene, &str) -> String,
 ) -> Result<()> {
+    let inputs = match &scene {
+        Ok(scene) => [
+            inputs.to_vec(),
+            environment_file(scene).into_iter().collect(),
+        ]
+        .concat(),
+        Err(_) => inputs.to_vec(),
+    };
+    if let Some(input) = inputs.iter().find(|input| same_file(path, input)) {
+        return Err(Error::invalid(
+            "output path",
+            path.display(),
+            format!(
+                "it is the environment map this render reads ({}); write the image to \
+                 another file",
+                input.display()
+            ),
+        ));
+    }
     let result = scene.and_then(|scene| render_and_write(&scene, path, summary));
     if result.is_err() {
-        discard_stale(path);
+        discard_stale(path, &inputs);
     }
     result
 }
 
-fn discard_stale(path: &Path) {
+/// The environment map `scene` reads from a file, if it reads one.
+fn environment_file(scene: &Scene) -> Option<PathBuf> {
+    match &scene.environment {
+        EnvironmentSpec::Map {
+            source: EnvironmentSource::Named(name),
+            ..
+        } if !name.starts_with("builtin:") => Some(PathBuf::from(name)),
+        _ => None,
+    }
+}
+
+/// Whether `a` and `b` name one existing file (through links, `..` or another spelling).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
+}
+
+/// Removes an earlier run's image at `path` after a failure, and says so. Only what this command
+/// writes is ever removed: a path without a .png or .exr extension was refused, not written, and
+/// is left alone, as is an input of the render (an .exr environment map).
+fn discard_stale(path: &Path, inputs: &[PathBuf]) {
+    if OutputFormat::from_path(path).is_err() || inputs.iter().any(|i| same_file(path, i)) {
+        return;
+    }
     if let Ok(true) = output::atomic::discard_stale_output(path) {
         eprintln!(
             "removed {} from an earlier run: it is not this run's output",

@@ -187,11 +187,14 @@ fn hdr_data_error(source: &str, message: String) -> Error {
 fn parse_hdr_header<'a>(bytes: &'a [u8], source: &str) -> Result<(usize, usize, &'a [u8])> {
     let mut at = 0;
     let mut line_number = 0;
+    // A header written with CRLF line ends (a Windows tool's) reads as the same lines: the
+    // first line was refused as not #?RADIANCE although it was, with a \r after it.
     let next_line = |at: &mut usize| -> Option<&'a [u8]> {
         let rest = bytes.get(*at..)?;
         let end = rest.iter().take(MAX_HDR_HEADER).position(|&b| b == b'\n')?;
         *at += end + 1;
-        Some(&rest[..end])
+        let line = &rest[..end];
+        Some(line.strip_suffix(b"\r").unwrap_or(line))
     };
     let unterminated = |line: usize| {
         Error::parse(
@@ -455,6 +458,18 @@ mod tests {
 
     fn error_text(result: Result<impl std::fmt::Debug>) -> String {
         result.expect_err("must fail").to_string()
+    }
+
+    #[test]
+    fn a_header_with_crlf_line_ends_reads_as_with_lf() {
+        let pixels = [128, 64, 32, 129, 255, 0, 0, 136];
+        let lf = hdr_file(2, 1, &pixels);
+        let text_end = lf.len() - pixels.len();
+        let header = String::from_utf8(lf[..text_end].to_vec()).unwrap();
+        let mut crlf = header.replace('\n', "\r\n").into_bytes();
+        crlf.extend_from_slice(&pixels);
+        let (a, b) = (decode_hdr(&lf, "lf.hdr"), decode_hdr(&crlf, "crlf.hdr"));
+        assert_eq!(a.unwrap().pixels, b.unwrap().pixels);
     }
 
     #[test]

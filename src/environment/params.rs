@@ -2,6 +2,8 @@
 //! has, at what face size it is stored, and which downsampled source it is convolved from. The GPU
 //! prefilter (`gpu.rs`) and the CPU oracle (`oracle.rs`) both run exactly this plan.
 
+use crate::error::show_number;
+use crate::model::limits;
 use crate::{Error, Result};
 
 /// Layers whose weight exp(-(1-c)/β²) falls below exp(-LOBE_CUTOFF) are not summed: 12.5 is 5σ of
@@ -298,6 +300,40 @@ impl EnvironmentLight {
         Self {
             intensity,
             rotation_deg,
+        }
+    }
+
+    /// Checks the map `image` (called `name`) lit by this light stays within the light levels
+    /// the device carries ([`limits::MAX_LIGHT_LEVEL`]): its brightest pixel times `intensity`.
+    /// A map of 1e38 was prefiltered to infinities and drew black.
+    pub fn check_levels(&self, image: &super::Equirect, name: &str) -> Result<()> {
+        if !(self.intensity.is_finite() && self.intensity >= 0.0) {
+            return Err(Error::invalid(
+                "environment intensity",
+                self.intensity,
+                "must be a finite number >= 0 (1 = the map as stored)",
+            ));
+        }
+        let brightest = image
+            .pixels
+            .iter()
+            .flatten()
+            .fold(0.0_f32, |max, &c| max.max(c));
+        let level = f64::from(brightest) * self.intensity;
+        match limits::light_level_problem(level) {
+            None => Ok(()),
+            Some(_) => Err(Error::invalid(
+                "environment intensity",
+                self.intensity,
+                format!(
+                    "{name}'s brightest pixel ({}) times the intensity is {}: the product must \
+                     be at most {:e}, the light level the renderer's f32 arithmetic carries; \
+                     lower the intensity (or scale the map and the exposure together)",
+                    show_number(f64::from(brightest)),
+                    show_number(level),
+                    limits::MAX_LIGHT_LEVEL
+                ),
+            )),
         }
     }
 

@@ -131,6 +131,7 @@ impl EnvironmentPreparer {
     ) -> Result<GpuEnvironment> {
         let loaded = source.load()?;
         self.note_replaced_pixels(&loaded, warnings);
+        light.check_levels(&loaded.image, source.name())?;
         let params = model_params(gpu, loaded.image.width, model);
         let env = self.prepare_image(gpu, &loaded.image, (light, &params), warnings)?;
         if bright || model == EnvironmentModel::Brdf {

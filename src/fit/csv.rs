@@ -203,7 +203,8 @@ impl Header {
         let mut nm = Vec::with_capacity(value_columns.len());
         for &i in &value_columns {
             match names[i].parse::<f64>() {
-                Ok(v) if v.is_finite() => nm.push(v),
+                // A wavelength is > 0 nm: `-380` passed as one and bent the resampling.
+                Ok(v) if v.is_finite() && v > 0.0 => nm.push(v),
                 _ => return Err(format!("unknown column `{}`; {HEADER_HELP}", names[i])),
             }
         }
@@ -372,6 +373,9 @@ mod tests {
         );
         let (_, m) = parse_error("sample,r,theta_i_deg,theta_o_deg,phi_deg,R,G,B,X\n");
         assert!(m.starts_with("unknown column `X`"), "{m}");
+        // Not a wavelength: it covered 380 nm and bent the resampling.
+        let (_, m) = parse_error("sample,r,theta_i_deg,theta_o_deg,phi_deg,-380,580,780\n");
+        assert!(m.starts_with("unknown column `-380`"), "{m}");
         let (line, m) = parse_error(HEADER);
         assert_eq!(line, 1);
         assert!(m.starts_with("the header has no data rows"), "{m}");

@@ -245,6 +245,15 @@ fn check_enough_data(
             ),
         ));
     }
+    // All-zero data "fitted" m = 1 and k_d = 0 with a relative residual of 1: nothing to fit.
+    if rows.iter().all(|r| r.reflectance.iter().all(|&v| v == 0.0)) {
+        return Err(Error::invalid(
+            "data",
+            format!("{} rows, every R, G and B 0", rows.len()),
+            "the measurements hold no reflected light to fit; check that the file's R, G, B \
+             columns hold the reflectance factors (π·f_r)",
+        ));
+    }
     for (s, sample) in data.samples.iter().enumerate() {
         let mut views: Vec<f64> = rows
             .iter()

@@ -56,6 +56,22 @@ impl ContextOptions {
         }
     }
 
+    /// Why `SHIKKI_RAY_QUERY` is not a value [`Self::ray_tracing_by_env`] knows, if it is not:
+    /// an unknown value was taken for "auto" without a word (`SHIKKI_RAY_QUERY=off`).
+    pub fn ray_tracing_env_problem() -> Option<crate::Error> {
+        let value = std::env::var("SHIKKI_RAY_QUERY").ok()?;
+        match value.as_str() {
+            "" | "0" | "1" | "auto" | "pipeline" => None,
+            _ => Some(crate::Error::invalid(
+                "SHIKKI_RAY_QUERY",
+                format!("{value:?}"),
+                "valid values are 0 (no ray tracing), pipeline (the ray-tracing pipeline even \
+                 where ray queries exist), or auto / 1 / unset (ray queries where the device has \
+                 them)",
+            )),
+        }
+    }
+
     pub fn from_env() -> Self {
         Self {
             validation: std::env::var("SHIKKI_VALIDATION").is_ok_and(|v| v == "1"),

@@ -22,11 +22,15 @@ pub enum GpuError {
          lavapipe: apt-get install mesa-vulkan-drivers"
     )]
     NoDevice { detail: String },
-    #[error("SHIKKI_DEVICE={wanted:?} matches no Vulkan device; the devices are: {available}")]
+    #[error(
+        "the device name {wanted:?} (SHIKKI_DEVICE; in the C API options.device_name) matches \
+         no Vulkan device; the devices are: {available}"
+    )]
     DeviceNotFound { wanted: String, available: String },
     #[error(
         "validation was requested but the layer VK_LAYER_KHRONOS_validation is not installed: \
-         apt-get install vulkan-validationlayers (or unset SHIKKI_VALIDATION)"
+         apt-get install vulkan-validationlayers, or turn validation off (unset \
+         SHIKKI_VALIDATION; in the C API options.validation = false)"
     )]
     ValidationLayerMissing,
     #[error("the Vulkan device {device:?} lacks {what}, which shikki needs")]

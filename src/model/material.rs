@@ -9,6 +9,7 @@ use std::path::PathBuf;
 
 use super::brdf::BrdfParams;
 use super::fresnel::{check_ior, FresnelTable, DEFAULT_IOR_A, DEFAULT_IOR_B};
+use super::limits;
 use crate::text::nearest;
 // Only for the scene loader's imports until they name `crate::text`.
 use crate::{Error, Result};
@@ -190,11 +191,11 @@ impl LacquerMaterial {
         };
         match (key, value) {
             ("m", Number(x)) => self.beckmann_m = checked_beckmann_m(x)?,
-            ("a", Number(x)) => self.diffuse_a = x,
-            ("b", Number(x)) => self.diffuse_b = x,
-            ("c0", Number(x)) => self.lacquer_law[0] = x,
-            ("c1", Number(x)) => self.lacquer_law[1] = x,
-            ("c2", Number(x)) => self.lacquer_law[2] = x,
+            ("a", Number(x)) => self.diffuse_a = checked_coefficient(key, x)?,
+            ("b", Number(x)) => self.diffuse_b = checked_coefficient(key, x)?,
+            ("c0", Number(x)) => self.lacquer_law[0] = checked_coefficient(key, x)?,
+            ("c1", Number(x)) => self.lacquer_law[1] = checked_coefficient(key, x)?,
+            ("c2", Number(x)) => self.lacquer_law[2] = checked_coefficient(key, x)?,
             ("r", Number(x)) => self.lacquer_ratio = x,
             ("kd", Rgb(kd)) => self.albedo = checked_albedo(kd)?,
             ("extrapolate_g", Bool(b)) => self.extrapolate_g = b,
@@ -230,10 +231,10 @@ impl LacquerMaterial {
     /// Every rule of SPEC §2 (and the ranges of §3–4 fields); the first broken one is the error.
     pub fn validate(&self) -> Result<()> {
         checked_beckmann_m(self.beckmann_m)?;
-        checked_finite("a", self.diffuse_a)?;
-        checked_finite("b", self.diffuse_b)?;
+        checked_coefficient("a", self.diffuse_a)?;
+        checked_coefficient("b", self.diffuse_b)?;
         for (key, c) in ["c0", "c1", "c2"].iter().zip(self.lacquer_law) {
-            checked_finite(key, c)?;
+            checked_coefficient(key, c)?;
         }
         checked_albedo(self.albedo)?;
         self.check_lacquer_ratio()?;
@@ -381,14 +382,37 @@ fn checked_finite(key: &str, v: f64) -> Result<f64> {
     }
 }
 
+/// A coefficient of the diffuse law: finite, and within what f32 carries
+/// ([`limits::MAX_DIFFUSE_COEFFICIENT`]).
+fn checked_coefficient(key: &str, v: f64) -> Result<f64> {
+    checked_finite(key, v)?;
+    if v.abs() <= limits::MAX_DIFFUSE_COEFFICIENT {
+        Ok(v)
+    } else {
+        Err(Error::invalid(
+            key,
+            v,
+            format!(
+                "must be within ±{:e} (the paper's fits are within ±1.3)",
+                limits::MAX_DIFFUSE_COEFFICIENT
+            ),
+        ))
+    }
+}
+
+/// SPEC §2's (0, 1], from [`limits::MIN_BECKMANN_M`]: below it the device's f32 loses the lobe.
 fn checked_beckmann_m(m: f64) -> Result<f64> {
-    if m > 0.0 && m <= 1.0 {
+    if (limits::MIN_BECKMANN_M..=1.0).contains(&m) {
         Ok(m)
     } else {
         Err(Error::invalid(
             "m",
             m,
-            "the Beckmann RMS slope must be in (0, 1] (smooth lacquer 0.05, rough 0.20)",
+            format!(
+                "the Beckmann RMS slope must be in [{}, 1] (smooth lacquer 0.05, rough 0.20; \
+                 SPEC §2's (0, 1], from the least m the renderer's f32 arithmetic resolves)",
+                limits::MIN_BECKMANN_M
+            ),
         ))
     }
 }

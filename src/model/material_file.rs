@@ -507,8 +507,9 @@ mod tests {
         let (line, message) = parse_error("a = 1\nm = 1.5\n");
         assert_eq!(line, 2);
         assert!(
-            message
-                .starts_with("column 5: invalid m = 1.5: the Beckmann RMS slope must be in (0, 1]"),
+            message.starts_with(
+                "column 5: invalid m = 1.5: the Beckmann RMS slope must be in [0.001, 1]"
+            ),
             "{message}"
         );
         // A cross-field rule (validate) points at the key that broke it.

@@ -9,6 +9,7 @@
 pub mod brdf;
 pub mod cie;
 pub mod fresnel;
+pub mod limits;
 pub mod material;
 pub mod material_file;
 pub mod spectral;

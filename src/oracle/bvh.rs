@@ -176,12 +176,30 @@ impl SceneBvh {
     /// Nearest hit with t in [t_min, t_max] of origin + t·dir (dir need not be unit; both faces
     /// count). A non-finite or zero ray, or a NaN bound, hits nothing.
     pub fn intersect(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Option<BvhHit> {
-        self.traverse(origin, dir, t_min, t_max, false)
+        self.traverse(origin, dir, (t_min, t_max), None, false)
     }
 
     /// Whether any triangle is hit with t in [t_min, t_max] (may stop at the first found).
     pub fn occluded(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> bool {
-        self.traverse(origin, dir, t_min, t_max, true).is_some()
+        self.traverse(origin, dir, (t_min, t_max), None, true)
+            .is_some()
+    }
+
+    /// [`Self::intersect`] for t ≥ 0 with object `skip`'s triangles left out (an instance mask).
+    pub fn intersect_skipping(&self, origin: Vec3, dir: Vec3, skip: Option<u32>) -> Option<BvhHit> {
+        self.traverse(origin, dir, (0.0, f32::INFINITY), skip, false)
+    }
+
+    /// [`Self::occluded`] with object `skip`'s triangles left out (an instance mask).
+    pub fn occluded_skipping(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        (t_min, t_max): (f32, f32),
+        skip: Option<u32>,
+    ) -> bool {
+        self.traverse(origin, dir, (t_min, t_max), skip, true)
+            .is_some()
     }
 
     /// The number of triangles given to [`Self::new`], degenerate ones included.
@@ -194,8 +212,8 @@ impl SceneBvh {
         &self,
         origin: Vec3,
         dir: Vec3,
-        t_min: f32,
-        mut t_max: f32,
+        (t_min, mut t_max): (f32, f32),
+        skip: Option<u32>,
         any_hit: bool,
     ) -> Option<BvhHit> {
         if t_min.is_nan() || t_max.is_nan() || t_min > t_max {
@@ -215,7 +233,7 @@ impl SceneBvh {
             let Node { first, count, .. } = self.nodes[node];
             if count > 0 {
                 let leaf = &self.triangles[first as usize..(first + count) as usize];
-                for triangle in leaf {
+                for triangle in leaf.iter().filter(|t| Some(t.object) != skip) {
                     let Some((t, u, v)) = ray.hit_triangle(&triangle.vertices, t_min, t_max) else {
                         continue;
                     };

@@ -208,7 +208,10 @@ impl Twin<'_> {
             position,
             normal,
             view,
-            surface: ray_surface(mesh, hit.triangle, position, normal),
+            surface: self.scene.own(
+                hit.object as usize,
+                ray_surface(mesh, hit.triangle, position, normal),
+            ),
         }
     }
 
@@ -352,7 +355,8 @@ impl Twin<'_> {
                 let ng = at.surface.geometric_normal;
                 let side = if s.dot(ng) < 0.0 { -ng } else { ng };
                 let origin = offset_ray_origin(at.surface.point, side);
-                let Some(hit) = self.scene.bvh().intersect(origin, s, 0.0, f32::INFINITY) else {
+                let skip = at.surface.own;
+                let Some(hit) = self.scene.bvh().intersect_skipping(origin, s, skip) else {
                     break;
                 };
                 hit_first |= depth == 0;

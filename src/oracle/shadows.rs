@@ -13,6 +13,7 @@ use super::bvh::SceneBvh;
 use crate::model::{BrdfParams, FresnelTable};
 use crate::output::HdrImage;
 use crate::raster::draw::RayTracing;
+use crate::raster::self_hits::{own_mask_bits, SelfHits};
 use crate::raster::{Camera, Light, Mesh};
 
 /// Far enough for a directional light, as `RAY_FAR` in visibility.glsl.
@@ -32,6 +33,12 @@ pub struct RaySurface {
     pub point: Vec3,
     /// Unit, on the side of the shading normal.
     pub geometric_normal: Vec3,
+    /// Whether the point is shaded from its triangle's winding side (the geometric normal not
+    /// turned): which of the mesh's sides the rays leave.
+    pub front: bool,
+    /// The object no ray leaving here meets: the surface's own, where its mesh is convex on the
+    /// side the rays leave (visibility.glsl's `trace_mask`; [`TracedScene::own`]).
+    pub own: Option<u32>,
 }
 
 fn vertex(mesh: &Mesh, triangle: u32, k: usize) -> (Vec3, Vec3) {
@@ -54,10 +61,13 @@ pub fn ray_surface(mesh: &Mesh, triangle: u32, position: Vec3, n: Vec3) -> RaySu
         return RaySurface {
             point: position,
             geometric_normal: n,
+            front: true,
+            own: None,
         };
     }
     let ng = cross_e * area2.sqrt().recip();
-    let geometric_normal = if ng.dot(n) < 0.0 { -ng } else { ng };
+    let front = ng.dot(n) >= 0.0;
+    let geometric_normal = if front { ng } else { -ng };
     let d = position - p0;
     let b1 = d.cross(e2).dot(cross_e) / area2;
     let b2 = e1.cross(d).dot(cross_e) / area2;
@@ -71,6 +81,8 @@ pub fn ray_surface(mesh: &Mesh, triangle: u32, position: Vec3, n: Vec3) -> RaySu
     RaySurface {
         point: lifted,
         geometric_normal,
+        front,
+        own: None,
     }
 }
 
@@ -116,17 +128,20 @@ pub fn light_visible(bvh: &SceneBvh, surface: &RaySurface, light: &Light) -> boo
     };
     let origin = offset_ray_origin(surface.point, side);
     if !point {
-        return !bvh.occluded(origin, vector.normalize(), 0.0, RAY_FAR);
+        return !bvh.occluded_skipping(origin, vector.normalize(), (0.0, RAY_FAR), surface.own);
     }
     let to_light = vector - origin;
     let distance = to_light.length();
-    !bvh.occluded(origin, to_light / distance, 0.0, distance)
+    !bvh.occluded_skipping(origin, to_light / distance, (0.0, distance), surface.own)
 }
 
 /// The scene as the twin traces it.
 pub struct TracedScene<'a> {
     objects: &'a [TracedObject<'a>],
     bvh: SceneBvh,
+    /// Per object, the sides its rays leave it by without meeting it ([`SelfHits`]), where the
+    /// draw gives it an instance mask bit of its own (`own_mask_bits`), else none.
+    clear: Vec<SelfHits>,
 }
 
 impl<'a> TracedScene<'a> {
@@ -135,9 +150,39 @@ impl<'a> TracedScene<'a> {
             .iter()
             .map(|o| (o.mesh.positions.as_slice(), o.mesh.indices.as_slice()))
             .collect();
+        let hits: Vec<(u32, SelfHits)> = objects
+            .iter()
+            .map(|o| {
+                (
+                    u32::try_from(o.mesh.triangle_count()).unwrap_or(u32::MAX),
+                    SelfHits::of(o.mesh),
+                )
+            })
+            .collect();
+        let bits = own_mask_bits(hits.iter().copied());
+        let clear = hits
+            .iter()
+            .zip(bits)
+            .map(|(&(_, hits), bit)| if bit != 0 { hits } else { SelfHits::ANY })
+            .collect();
         Self {
             objects,
             bvh: SceneBvh::new(&meshes),
+            clear,
+        }
+    }
+
+    /// `surface`, a point of `object`, with the object its rays never meet set
+    /// (visibility.glsl's `trace_mask`).
+    pub fn own(&self, object: usize, surface: RaySurface) -> RaySurface {
+        let clear = self.clear[object];
+        let leaves_clear = match surface.front {
+            true => clear.front_clear,
+            false => clear.back_clear,
+        };
+        RaySurface {
+            own: leaves_clear.then_some(object as u32),
+            ..surface
         }
     }
 

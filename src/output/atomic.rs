@@ -35,15 +35,16 @@ pub(crate) fn write_atomically_with(
 }
 
 /// Removes a previous run's file at `path` so it cannot be mistaken for the output of a run that
-/// failed. Returns whether a file was removed. Directories are left alone (and reported as
-/// `false`); a missing file is not an error.
+/// failed. Returns whether a file was removed. Only a regular file is removed: a directory, a
+/// symbolic link, a device (`-o /dev/null` removed the device node) or a pipe is left alone and
+/// reported as `false`; a missing file is not an error.
 ///
 /// The CLI calls this when a run fails before reaching [`write_atomically`] (e.g. a GPU error
 /// after [`preflight_output`](super::preflight_output)).
 pub fn discard_stale_output(path: &Path) -> io::Result<bool> {
     match fs::symlink_metadata(path) {
-        Ok(meta) if meta.is_dir() => Ok(false),
-        Ok(_) => fs::remove_file(path).map(|()| true),
+        Ok(meta) if meta.file_type().is_file() => fs::remove_file(path).map(|()| true),
+        Ok(_) => Ok(false),
         Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(false),
         Err(e) => Err(e),
     }
@@ -76,8 +77,31 @@ pub(crate) fn probe_directory(path: &Path) -> std::result::Result<(), String> {
     if path.is_dir() {
         return Err(is_a_directory(path));
     }
+    // Checked here, before the work: the temporary file's name is bounded, so a name over the
+    // limit passed the probe and failed only at the rename, after the render.
+    let length = file_name.as_encoded_bytes().len();
+    if length > MAX_FILE_NAME_BYTES {
+        return Err(format!(
+            "the file name of {} is {length} bytes; file systems take at most \
+             {MAX_FILE_NAME_BYTES}: choose a shorter name",
+            path.display()
+        ));
+    }
+    if let Ok(meta) = fs::symlink_metadata(path) {
+        let kind = meta.file_type();
+        if !(kind.is_file() || kind.is_symlink()) {
+            return Err(format!(
+                "{} exists and is not a regular file (a device, pipe or socket); the image \
+                 would replace it: choose a file path",
+                path.display()
+            ));
+        }
+    }
     TempFile::create_in(directory_of(path), file_name).map(drop)
 }
+
+/// The longest file name (one path component) Linux's file systems and most others take.
+const MAX_FILE_NAME_BYTES: usize = 255;
 
 /// The write → fsync → rename sequence. Any early return drops the [`TempFile`], deleting it.
 fn replace_via_temp(
@@ -377,5 +401,42 @@ mod tests {
         let path = dir.join(format!("{}.png", "a".repeat(246)));
         write_atomically(&path, b"data").unwrap();
         assert_eq!(fs::read(&path).unwrap(), b"data");
+    }
+
+    /// Only a regular file is ever removed as stale: `-o /dev/null` removed the device node
+    /// (a probe, 2026-12-06). A link is left too (its target is not this run's to judge).
+    #[cfg(unix)]
+    #[test]
+    fn only_a_regular_file_is_removed_as_stale() {
+        let dir = scratch_dir("stale-kinds");
+        let target = dir.join("target.png");
+        fs::write(&target, b"keep").unwrap();
+        let link = dir.join("link.png");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        assert!(!discard_stale_output(&link).unwrap());
+        assert!(fs::symlink_metadata(&link).is_ok());
+        assert!(!discard_stale_output(Path::new("/dev/null")).unwrap());
+        assert!(Path::new("/dev/null").exists());
+        assert!(discard_stale_output(&target).unwrap());
+        assert!(!target.exists());
+    }
+
+    /// A name over 255 bytes, or a device at the path, is refused before any work; the name
+    /// was refused only at the rename, after the render, with a false warning.
+    #[test]
+    fn the_probe_refuses_long_names_and_devices() {
+        let dir = scratch_dir("probe-refuses");
+        let long = dir.join(format!("{}.png", "x".repeat(252)));
+        let message = probe_directory(&long).unwrap_err();
+        assert!(
+            message.contains("256 bytes") && message.contains("255"),
+            "{message}"
+        );
+        probe_directory(&dir.join(format!("{}.png", "x".repeat(251)))).unwrap();
+        #[cfg(unix)]
+        {
+            let message = probe_directory(Path::new("/dev/null")).unwrap_err();
+            assert!(message.contains("not a regular file"), "{message}");
+        }
     }
 }

@@ -90,9 +90,8 @@ impl HdrImage {
             return Err(Error::invalid(
                 format!("pixel ({x}, {y})"),
                 format!("({r}, {g}, {b}, {a})"),
-                "every channel must be finite (no NaN or infinity); the render produced a \
-                 non-finite value, which is a bug or an out-of-range material or light — \
-                 check the inputs, nothing was written",
+                "every channel must be finite (no NaN or infinity); from a render, a \
+                 non-finite pixel is a bug: please report it with the scene",
             ));
         }
         Ok(())

@@ -72,13 +72,20 @@ pub fn preflight_output(path: &Path) -> Result<OutputFormat> {
 /// pixel's coordinates) — never write NaN.
 ///
 /// The format comes from the extension ([`OutputFormat::from_path`]); `settings` apply to PNG
-/// only, since EXR holds radiance as rendered. Any failure removes a previous file at `path` and
-/// says so in the error (stale-file policy in [`atomic`]).
+/// only, since EXR holds radiance as rendered. The arguments are checked first (the path's
+/// extension, the image, the settings): an invalid one is an [`Error::InvalidParameter`] and
+/// leaves `path` as it was. A failure after that removes a previous file at `path` and says so
+/// in the error (stale-file policy in [`atomic`]).
 pub fn write_image(path: &Path, image: &HdrImage, settings: &PngSettings) -> Result<()> {
-    let encoded = OutputFormat::from_path(path).and_then(|format| match format {
+    let format = OutputFormat::from_path(path)?;
+    image.validate_for_encoding()?;
+    if format == OutputFormat::Png {
+        settings.validate()?;
+    }
+    let encoded = match format {
         OutputFormat::Png => png::encode_png(image, settings),
         OutputFormat::Exr => exr::encode_exr(image),
-    });
+    };
     match encoded {
         Ok(bytes) => atomic::write_atomically(path, &bytes),
         Err(cause) => Err(atomic::failed_write(path, &cause.to_string())),
@@ -156,21 +163,33 @@ mod tests {
     }
 
     #[test]
-    fn writing_nan_fails_names_the_pixel_and_removes_the_stale_file() {
+    fn invalid_arguments_are_refused_naming_them_and_leave_the_path_alone() {
+        // A NaN pixel or exposure is the caller's argument, refused before the path is touched
+        // (the CLI and the C API remove a stale output themselves when a render fails).
         let dir = scratch("nan");
         for name in ["out.png", "out.exr"] {
             let path = dir.join(name);
             std::fs::write(&path, b"previous run").unwrap();
             let mut image = HdrImage::new(4, 4);
             image.set(3, 2, [0.0, f32::NAN, 0.0, 1.0]);
-            let message = write_image(&path, &image, &PngSettings::default())
-                .unwrap_err()
-                .to_string();
+            let error = write_image(&path, &image, &PngSettings::default()).unwrap_err();
+            assert!(matches!(error, Error::InvalidParameter { .. }), "{error}");
+            let message = error.to_string();
             assert!(message.contains("pixel (3, 2)"), "{message}");
-            assert!(message.contains("was removed"), "{message}");
-            assert!(!path.exists(), "{name}: stale file survived");
+            assert!(
+                !message.contains("nothing was written; nothing"),
+                "{message}"
+            );
+            assert_eq!(std::fs::read(&path).unwrap(), b"previous run", "{name}");
         }
-        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+        let path = dir.join("out.png");
+        let settings = PngSettings {
+            exposure_ev: f32::NAN,
+            tone_curve: ToneCurve::Aces,
+        };
+        let error = write_image(&path, &HdrImage::new(2, 2), &settings).unwrap_err();
+        assert!(matches!(error, Error::InvalidParameter { .. }), "{error}");
+        assert_eq!(std::fs::read(&path).unwrap(), b"previous run");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

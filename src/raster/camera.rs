@@ -7,6 +7,7 @@
 
 use glam::{DMat4, DVec3, DVec4, Mat4};
 
+use crate::model::limits;
 use crate::{Error, Result};
 
 /// A look-at pinhole camera; vertical field of view, aspect = W/H of the image it renders.
@@ -39,20 +40,26 @@ impl Camera {
     pub fn validate(&self) -> Result<()> {
         let vectors = [("eye", self.eye), ("target", self.target), ("up", self.up)];
         for (name, v) in vectors {
-            if !v.is_finite() {
+            if let Some(reason) = limits::coordinate_problem(v) {
                 return Err(Error::invalid(
                     format!("camera.{name}"),
                     format_vec(v),
-                    "every component must be a finite number",
+                    reason,
                 ));
             }
         }
         let view = self.target - self.eye;
-        if view.length() == 0.0 {
+        let reach = self.eye.length().max(self.target.length()).max(1.0);
+        if view.length() <= limits::MIN_VIEW_DISTANCE * reach {
             return Err(Error::invalid(
                 "camera.target",
                 format_vec(self.target),
-                "the target must differ from the eye; move the eye or the target",
+                format!(
+                    "the target must differ from the eye by more than {:e} of their distance \
+                     from the origin (or 1), or the view direction is f32 rounding; move the \
+                     eye or the target",
+                    limits::MIN_VIEW_DISTANCE
+                ),
             ));
         }
         let sine = match self.up.try_normalize() {
@@ -67,11 +74,17 @@ impl Camera {
                  choose another up vector, e.g. 0,0,1 when looking straight down",
             ));
         }
-        if !(self.fov_deg.is_finite() && self.fov_deg > 0.0 && self.fov_deg < 180.0) {
+        if !(self.fov_deg.is_finite()
+            && self.fov_deg >= limits::MIN_FOV_DEG
+            && self.fov_deg < 180.0)
+        {
             return Err(Error::invalid(
                 "camera.fov_deg",
                 self.fov_deg,
-                "the vertical field of view must be in (0, 180) degrees, e.g. 40",
+                format!(
+                    "the vertical field of view must be in [{}, 180) degrees, e.g. 40",
+                    limits::MIN_FOV_DEG
+                ),
             ));
         }
         Ok(())
@@ -122,17 +135,18 @@ impl Camera {
         )
     }
 
-    /// The near and far planes for a scene inside a sphere of `scene_radius` about the origin:
-    /// tight around the sphere (1 % margin) so the depth buffer's precision is spent on the scene.
-    /// When the eye is inside or almost touching the sphere, near falls back to far·1e-4 — a
-    /// far/near ratio a 32-bit depth buffer still resolves well.
-    pub fn depth_range(&self, scene_radius: f64) -> (f64, f64) {
-        let radius = if scene_radius.is_finite() && scene_radius > 0.0 {
-            scene_radius
+    /// The near and far planes for a scene inside `scene` (a sphere, or a radius about the
+    /// origin): tight around the sphere (1 % margin) so the depth buffer's precision is spent on
+    /// the scene. When the eye is inside or almost touching the sphere, near falls back to
+    /// far·1e-4 — a far/near ratio a 32-bit depth buffer still resolves well.
+    pub fn depth_range(&self, scene: impl Into<SceneSphere>) -> (f64, f64) {
+        let scene = scene.into();
+        let radius = if scene.radius.is_finite() && scene.radius > 0.0 {
+            scene.radius
         } else {
             1.0
         };
-        let distance = self.eye.length();
+        let distance = self.eye.distance(scene.center);
         let far = (distance + radius) * 1.01;
         let near = ((distance - radius) * 0.99).max(far * 1e-4);
         (near, far)
@@ -140,10 +154,43 @@ impl Camera {
 
     /// f32 view-projection for the vertex shader, near/far from [`Camera::depth_range`].
     /// A zero width or height is treated as 1 so the matrix stays finite.
-    pub fn view_projection(&self, width: u32, height: u32, scene_radius: f64) -> Mat4 {
+    pub fn view_projection(&self, width: u32, height: u32, scene: impl Into<SceneSphere>) -> Mat4 {
         let aspect = f64::from(width.max(1)) / f64::from(height.max(1));
-        let (near, far) = self.depth_range(scene_radius);
+        let (near, far) = self.depth_range(scene);
         (self.projection_vulkan(aspect, near, far) * self.view_matrix()).as_mat4()
+    }
+}
+
+/// A sphere holding every object of a scene, which sets the depth range
+/// ([`Camera::depth_range`]). About the scene's own centre: one about the origin put a scene
+/// 1e5 from it, seen from 3.6 units, behind the near plane (it drew nothing; found by a probe,
+/// 2026-12-06).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneSphere {
+    pub center: DVec3,
+    pub radius: f64,
+}
+
+impl SceneSphere {
+    /// The sphere about the centre of the boxes' union, through its corners; None without boxes.
+    pub fn around_boxes(boxes: impl IntoIterator<Item = (DVec3, DVec3)>) -> Option<Self> {
+        let (min, max) = boxes
+            .into_iter()
+            .reduce(|(a0, a1), (b0, b1)| (a0.min(b0), a1.max(b1)))?;
+        Some(SceneSphere {
+            center: 0.5 * (min + max),
+            radius: 0.5 * min.distance(max),
+        })
+    }
+}
+
+impl From<f64> for SceneSphere {
+    /// A sphere of that radius about the origin.
+    fn from(radius: f64) -> Self {
+        SceneSphere {
+            center: DVec3::ZERO,
+            radius,
+        }
     }
 }
 
@@ -172,7 +219,7 @@ impl Camera {
         (min, max): (DVec3, DVec3),
         width: u32,
         height: u32,
-        scene_radius: f64,
+        scene: impl Into<SceneSphere>,
     ) -> PixelRect {
         let whole = PixelRect {
             x0: 0,
@@ -181,7 +228,7 @@ impl Camera {
             y1: height,
         };
         let aspect = f64::from(width.max(1)) / f64::from(height.max(1));
-        let (near, far) = self.depth_range(scene_radius);
+        let (near, far) = self.depth_range(scene);
         let view_projection = self.projection_vulkan(aspect, near, far) * self.view_matrix();
         let (mut lo, mut hi) = (glam::DVec2::splat(f64::INFINITY), glam::DVec2::NEG_INFINITY);
         for corner in 0..8 {
@@ -388,6 +435,26 @@ mod tests {
                 y1: h
             }
         );
+    }
+
+    #[test]
+    fn depth_range_follows_a_scene_far_from_the_origin() {
+        // The same view 1e5 from the origin: the range about the scene's own centre, not the
+        // origin (which put near at ~2,800 and the scene, 3 to 5 away, in front of it).
+        let offset = DVec3::new(1e5, 0.0, 1e5);
+        let far_away = Camera {
+            eye: Camera::default().eye + offset,
+            target: Camera::default().target + offset,
+            ..Camera::default()
+        };
+        let boxes = [(offset - DVec3::ONE, offset + DVec3::ONE)];
+        let sphere = SceneSphere::around_boxes(boxes).unwrap();
+        assert_eq!(sphere.center, offset);
+        let (near, far) = far_away.depth_range(sphere);
+        let radius = 3f64.sqrt();
+        assert!(near <= 4.0 - radius && near > 0.0, "near {near}");
+        assert!(far >= 4.0 + radius && far < 6.0, "far {far}");
+        assert_eq!(SceneSphere::around_boxes([]), None);
     }
 
     #[test]

@@ -8,6 +8,7 @@ use std::fmt;
 
 use glam::DVec3;
 
+use crate::model::limits;
 use crate::{Error, Result};
 
 /// One punctual light. Colours are linear Rec.709 RGB.
@@ -93,12 +94,8 @@ impl Light {
                 intensity,
             } => ("light.position", position, "light.intensity", intensity),
         };
-        if !vector.is_finite() {
-            return Err(Error::invalid(
-                vector_field,
-                format_triple(vector),
-                "every component must be a finite number",
-            ));
+        if let Some(reason) = limits::coordinate_problem(vector) {
+            return Err(Error::invalid(vector_field, format_triple(vector), reason));
         }
         if matches!(self, Light::Directional { .. }) && vector.length() == 0.0 {
             return Err(Error::invalid(
@@ -107,12 +104,12 @@ impl Light {
                 "the direction towards the light must be non-zero",
             ));
         }
-        if !colour.is_finite() || colour.min_element() < 0.0 {
-            return Err(Error::invalid(
-                colour_field,
-                format_triple(colour),
-                "every channel must be a finite number >= 0 (linear RGB)",
-            ));
+        if let Some(reason) = colour
+            .to_array()
+            .into_iter()
+            .find_map(limits::light_level_problem)
+        {
+            return Err(Error::invalid(colour_field, format_triple(colour), reason));
         }
         Ok(())
     }
@@ -297,8 +294,10 @@ mod tests {
             ("dir:0,0,0:1,1,1", "non-zero"),
             ("dir:0,nan,1:1,1,1", "finite"),
             ("point:inf,0,0:1,1,1", "finite"),
-            ("dir:0,1,0:1,-1,1", ">= 0"),
-            ("point:0,1,0:1,1,nan", ">= 0"),
+            ("dir:0,1,0:1,-1,1", "in [0, 1e20]"),
+            ("point:0,1,0:1,1,nan", "in [0, 1e20]"),
+            ("dir:0,1,0:1,1e21,1", "in [0, 1e20]"),
+            ("point:0,1e16,0:1,1,1", "within ±1e15"),
         ];
         for (spec, expected) in cases {
             let (field, reason) = reason_of(Light::parse(spec));

@@ -144,9 +144,17 @@ pub fn parse_document(text: &str, source: &str, base_dir: &Path) -> Result<Node>
         base_dir: Arc::from(base_dir),
     };
     let table = DeTable::parse(text).map_err(|e| {
-        located
-            .origin(e.span().unwrap_or(0..0))
-            .error(e.message().trim_end())
+        let span = e.span().unwrap_or(0..0);
+        let message = e.message().trim_end();
+        // The parser's "duplicate key" names no key: the span holds it (a key or a table header).
+        let message = match (message, text.get(span.clone())) {
+            ("duplicate key", Some(key)) if !key.trim().is_empty() => format!(
+                "duplicate key `{}`: a key (or table) may be written once; remove one",
+                key.trim()
+            ),
+            _ => message.to_string(),
+        };
+        located.origin(span).error(message)
     })?;
     Ok(Node {
         value: located.table(table.get_ref()),

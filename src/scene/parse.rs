@@ -16,6 +16,7 @@ use super::sections::{environment, light, output, render};
 use super::{EnvironmentSpec, MeshSource, OutputSpec, RenderSpec, Scene, SceneObject};
 use crate::environment::load::BUILTIN_STUDIO;
 use crate::model::fresnel::FresnelTable;
+use crate::model::limits;
 use crate::model::material::{MaterialValue, MATERIAL_KEYS};
 use crate::model::material_file::load_material_file;
 use crate::model::LacquerMaterial;
@@ -128,6 +129,19 @@ impl SceneDocument {
     /// The scene, every value checked.
     pub fn build(&self) -> Result<Scene> {
         scene_from_document(&self.root)
+    }
+
+    /// The file `[environment] source` names, if it names one (not a built-in), resolved as the
+    /// scene resolves it; read from the document, so it is known even when the scene does not
+    /// build. A render must not write its image over it, nor remove it as a failed run's output.
+    pub fn environment_file(&self) -> Option<PathBuf> {
+        let source = table_get(&self.root, "environment").and_then(|e| table_get(e, "source"))?;
+        match &source.value {
+            Value::Str(s) if !s.starts_with("builtin:") && s != "none" => {
+                Some(doc::resolve_path(&source.at, s))
+            }
+            _ => None,
+        }
     }
 
     /// `[output] format` (default png).
@@ -253,6 +267,35 @@ pub(super) fn located<T>(at: &Origin, result: Result<T>) -> Result<T> {
     result.map_err(|e| at.error(e))
 }
 
+/// `result`'s error located at the entry its field names (`camera.fov_deg` → the `fov_deg`
+/// value, which for a `--set` override is the override), `aliases` mapping a field's last part to
+/// the key written (`direction` → `to_light`); at the table `at` when no entry names it.
+pub(super) fn located_at_field<T>(
+    at: &Origin,
+    entries: &[Entry],
+    aliases: &[(&str, &str)],
+    result: Result<T>,
+) -> Result<T> {
+    result.map_err(|e| {
+        let key = match &e {
+            Error::InvalidParameter { field, .. } => {
+                let last = field.rsplit('.').next().unwrap_or(field);
+                aliases
+                    .iter()
+                    .find(|(from, _)| *from == last)
+                    .map_or(last, |(_, to)| *to)
+                    .to_string()
+            }
+            _ => String::new(),
+        };
+        entries
+            .iter()
+            .find(|entry| entry.key == key)
+            .map_or(at, |entry| &entry.node.at)
+            .error(e)
+    })
+}
+
 /// The whole scene from its document root.
 pub fn scene_from_document(root: &Node) -> Result<Scene> {
     let entries = table(root, "the scene file", TOP_KEYS)?;
@@ -317,7 +360,8 @@ fn array_of_tables<'a>(node: &'a Node, key: &str) -> Result<&'a [Node]> {
 fn camera(node: &Node) -> Result<Camera> {
     let mut camera = Camera::default();
     let mut orbit = 0.0;
-    for e in table(node, "[camera]", CAMERA_KEYS)? {
+    let entries = table(node, "[camera]", CAMERA_KEYS)?;
+    for e in entries {
         let n = &e.node;
         match e.key.as_str() {
             "eye" => camera.eye = vec3(n, "eye")?,
@@ -329,7 +373,7 @@ fn camera(node: &Node) -> Result<Camera> {
     }
     let offset = camera.eye - camera.target;
     camera.eye = camera.target + DQuat::from_rotation_y(orbit.to_radians()) * offset;
-    located(&node.at, camera.validate())?;
+    located_at_field(&node.at, entries, &[], camera.validate())?;
     Ok(camera)
 }
 
@@ -375,6 +419,12 @@ fn object(node: &Node) -> Result<SceneObject> {
             )
         }
     };
+    if let Some(reason) = limits::placement_problem(&transform) {
+        let at = get("transform")
+            .or(trs.first().copied())
+            .map_or(&node.at, |e| &e.key_at);
+        return Err(at.error(format!("the object's placement cannot be drawn: {reason}")));
+    }
     let material = match get("material") {
         None => LacquerMaterial::default(),
         Some(e) => material(&e.node)?,

@@ -21,6 +21,7 @@ use crate::environment::{
     EnvironmentLight, EnvironmentModel, EnvironmentPreparer, EnvironmentSource,
 };
 use crate::gpu::GpuContext;
+use crate::model::limits;
 use crate::model::{BrdfParams, FresnelTable};
 use crate::output::HdrImage;
 use crate::raster::draw::{
@@ -29,7 +30,7 @@ use crate::raster::draw::{
 use crate::raster::gpu_mesh::GpuMesh;
 use crate::raster::mesh::{BuiltinMesh, Mesh};
 use crate::raster::mesh_io::transform_mesh;
-use crate::{Result, Warning};
+use crate::{Error, Result, Warning};
 
 /// More distinct environments than this in one run (a sweep over rotation, say) evicts the oldest:
 /// a 1k-face cube with its layers is tens of MB of device memory.
@@ -152,7 +153,8 @@ impl SceneRenderer {
     ) -> Result<(HdrImage, Option<DrawTimings>)> {
         let mut meshes = Vec::with_capacity(scene.objects.len());
         let mut shading: Vec<(BrdfParams, FresnelTable, ViewBlur)> = Vec::new();
-        for object in &scene.objects {
+        for (index, object) in scene.objects.iter().enumerate() {
+            placement_checked(index, object.transform)?;
             meshes.push(self.placed_mesh(&object.mesh, object.transform)?);
             shading.push((
                 object.material.brdf_params()?,
@@ -373,5 +375,17 @@ impl SceneRenderer {
     fn evict_environments(&mut self, keep: usize) {
         let excess = self.environments.len().saturating_sub(keep);
         self.environments.drain(..excess);
+    }
+}
+
+/// Object `index`'s placement, refused as [`limits::placement_problem`] says, naming the object.
+fn placement_checked(index: usize, transform: glam::DMat4) -> Result<()> {
+    match limits::placement_problem(&transform) {
+        None => Ok(()),
+        Some(reason) => Err(Error::invalid(
+            format!("object.{index} placement"),
+            "its transform",
+            reason,
+        )),
     }
 }

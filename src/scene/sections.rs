@@ -5,8 +5,8 @@ use glam::DVec3;
 
 use super::doc::{self, Node, Value};
 use super::parse::{
-    boolean, format_of, located, number, show, string, table, vec3, whole, ENVIRONMENT_KEYS,
-    LIGHT_KEYS, OUTPUT_KEYS, RENDER_KEYS,
+    boolean, format_of, located, located_at_field, number, show, string, table, vec3, whole,
+    ENVIRONMENT_KEYS, LIGHT_KEYS, OUTPUT_KEYS, RENDER_KEYS,
 };
 use super::{EnvironmentLight, EnvironmentSource, EnvironmentSpec, OutputSpec, RenderSpec};
 use crate::environment::load::BUILTIN_STUDIO;
@@ -79,28 +79,31 @@ pub(super) fn light(node: &Node) -> Result<Light> {
             )));
         }
     };
-    located(&node.at, light.validate())?;
+    let written = [("direction", "to_light")];
+    located_at_field(&node.at, entries, &written, light.validate())?;
     Ok(light)
 }
 
 /// `[environment]` or `environment = "none" | "builtin:studio" | "path.hdr"`.
 pub(super) fn environment(node: &Node) -> Result<EnvironmentSpec> {
     let (mut source, mut intensity, mut rotation_deg) = (None, 1.0, 0.0);
+    let mut intensity_at = &node.at;
     if let Value::Str(_) = node.value {
         source = Some(node);
     } else {
         for e in table(node, "[environment]", ENVIRONMENT_KEYS)? {
             match e.key.as_str() {
                 "source" => source = Some(&e.node),
-                "intensity" => intensity = number(&e.node, "intensity")?,
+                "intensity" => {
+                    intensity = number(&e.node, "intensity")?;
+                    intensity_at = &e.node.at;
+                }
                 _ => rotation_deg = number(&e.node, "rotation_deg")?,
             }
         }
     }
     if intensity < 0.0 {
-        return Err(node
-            .at
-            .error(format!("`intensity` must be ≥ 0, found {intensity}")));
+        return Err(intensity_at.error(format!("`intensity` must be ≥ 0, found {intensity}")));
     }
     let light = EnvironmentLight {
         intensity,

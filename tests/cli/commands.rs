@@ -410,6 +410,56 @@ fn prefilter_writes_every_layer_irradiance_and_a_preview() {
     assert_eq!(irradiance.width, 6 * irradiance.height);
     let preview = std::fs::read(dir.path().join("pf/preview.png")).unwrap();
     assert!(shikki::output::png::decode_png_rgba8(&preview).is_ok());
+    // Again with fewer layers: the earlier run's layers past them would pass for this run's.
+    let args = [
+        "prefilter",
+        "builtin:studio",
+        "-o",
+        "pf",
+        "--face-size",
+        "32",
+    ];
+    assert_ok(&shikki(
+        dir.path(),
+        &[&args[..], &["--layers", "2"]].concat(),
+    ));
+    let layers = |dir: &std::path::Path| {
+        let mut names: Vec<String> = std::fs::read_dir(dir.join("pf"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with("layer_"))
+            .collect();
+        names.sort();
+        names
+    };
+    assert_eq!(layers(dir.path()), ["layer_0.exr", "layer_1.exr"]);
+    // A failed run leaves none of its files, as a failed render leaves no image.
+    let out = shikki(dir.path(), &[&args[..], &["--beta-min", "0"]].concat());
+    assert!(!out.status.success());
+    assert!(layers(dir.path()).is_empty());
+    assert!(!dir.path().join("pf/irradiance.exr").exists());
+    assert!(!dir.path().join("pf/preview.png").exists());
+}
+
+/// An unknown `SHIKKI_RAY_QUERY` is an error naming the valid values: `off` was taken for
+/// "auto" and traced rays without a word.
+#[test]
+fn an_unknown_ray_query_setting_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_shikki"))
+        .env("SHIKKI_RAY_QUERY", "off")
+        .env("SHIKKI_PIPELINE_CACHE", "0")
+        .args(["render", "--size", "8x8", "-o", "x.png"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(
+        err.contains("SHIKKI_RAY_QUERY") && err.contains("pipeline"),
+        "{err}"
+    );
+    assert!(!dir.path().join("x.png").exists());
 }
 
 #[test]

@@ -234,3 +234,14 @@ fn merl_file_of_the_wrong_size_or_kind() {
         .to_string()
         .starts_with("invalid MERL file tiny.binary = 2 bytes:"));
 }
+
+/// All-zero data was "fitted" (m = 1, k_d = 0, relative residual 1) and written, exit 0.
+#[test]
+fn data_without_light_is_refused() {
+    let mut data = synthetic(&[1.0, 3.0, 5.0], |_| true);
+    for row in &mut data.rows {
+        row.reflectance = [0.0; 3];
+    }
+    let message = fit_error(&data);
+    assert!(message.contains("no reflected light"), "{message}");
+}

@@ -170,17 +170,20 @@ fn preflight_rejects_jpg_and_accepts_png_and_exr() {
 }
 
 #[test]
-fn a_failed_write_removes_the_previous_runs_file() {
+fn a_non_finite_image_is_refused_before_the_path_is_touched() {
+    // The image is the caller's argument: refused whole, nothing written, the previous file as it
+    // was (a failed render removes it: the CLI and the C API do that, not the encoder). A write
+    // that fails after the checks removes it: src/output/atomic.rs's tests.
     let dir = scratch("stale");
     let path = dir.join("out.exr");
     write_image(&path, &red_over_blue(), &LINEAR).unwrap();
+    let before = fs::read(&path).unwrap();
     let mut broken = red_over_blue();
     broken.set(1, 0, [f32::NAN, 0.0, 0.0, 1.0]);
     let message = write_image(&path, &broken, &LINEAR)
         .unwrap_err()
         .to_string();
     assert!(message.contains("pixel (1, 0)"), "{message}");
-    assert!(message.contains("removed"), "{message}");
-    assert!(!path.exists());
-    assert_eq!(fs::read_dir(&dir).unwrap().count(), 0);
+    assert_eq!(fs::read(&path).unwrap(), before);
+    assert_eq!(fs::read_dir(&dir).unwrap().count(), 1);
 }

@@ -88,11 +88,11 @@ fn scene_nan_inf_and_negative_values_name_the_key() {
         (
             "[[object]]\nmesh = \"builtin:bowl\"\nmaterial = { m = -0.1 }\n",
             3,
-            vec!["invalid m = -0.1", "(0, 1]"],
+            vec!["invalid m = -0.1", "[0.001, 1]"],
         ),
         (
             "[environment]\nsource = \"none\"\nintensity = -1\n",
-            1,
+            3,
             vec!["`intensity` must be ≥ 0"],
         ),
         (

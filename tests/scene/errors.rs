@@ -1,6 +1,8 @@
 //! Scene errors: wrong type, unknown key, missing file, bad mesh, bad value, bad syntax — each a
 //! message with file:line and column, exit code ≠ 0 from the CLI, and no output written.
 
+use crate::common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -28,6 +30,39 @@ const CASES: &[(&str, usize, usize, &[&str])] = &[
         3,
         33,
         &["rr", "did you mean `r`"],
+    ),
+    // a value a check of the whole section refuses, at that value's line (it was the section's)
+    (
+        "[camera]\neye = [0, 0, 4]\n\nfov_deg = 0\n",
+        4,
+        11,
+        &["camera.fov_deg", "180"],
+    ),
+    (
+        "[[light]]\nkind = \"dir\"\nto_light = [0, 1, 0]\nirradiance = [1, -1, 1]\n",
+        4,
+        14,
+        &["light.irradiance", "1e20"],
+    ),
+    (
+        "[environment]\nsource = \"builtin:studio\"\nintensity = -1\n",
+        3,
+        13,
+        &["intensity", "≥ 0"],
+    ),
+    // a placement the renderer's f32 cannot draw, at the key that placed it
+    (
+        "[[object]]\nmesh = \"builtin:sphere\"\nscale = [1, 1, 1e-30]\n",
+        3,
+        1,
+        &["placement", "[1e-12, 1e12]"],
+    ),
+    // a key written twice, named
+    (
+        "[camera]\nfov_deg = 30\nfov_deg = 40\n",
+        3,
+        1,
+        &["duplicate key `fov_deg`"],
     ),
     // missing files: mesh, material, environment
     (
@@ -66,9 +101,9 @@ const CASES: &[(&str, usize, usize, &[&str])] = &[
     ("[output]\nsamples = 3\n", 2, 11, &["samples", "[1, 4]"]),
     (
         "[camera]\neye = [0, 0, 0]\ntarget = [0, 0, 0]\n",
-        1,
-        1,
-        &["eye"],
+        3,
+        10,
+        &["eye", "camera.target"],
     ),
     // syntax
     ("[camera\nfov_deg = 30\n", 1, 8, &[]),
@@ -164,4 +199,98 @@ fn cli_scene_errors_exit_nonzero_and_write_nothing() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--set camera.fov_deg"));
     assert!(!dir.path().join("y.png").exists());
+    // A value a check of the whole section refuses names the override that set it.
+    let mut doc =
+        SceneDocument::parse("[camera]\nfov_deg = 30\n", "s.toml", Path::new(".")).unwrap();
+    doc.set("camera.fov_deg=0", Path::new(".")).unwrap();
+    let message = doc.build().unwrap_err().to_string();
+    assert!(message.contains("--set camera.fov_deg"), "{message}");
+}
+
+/// A failed render removes an earlier image at its output path, and nothing else: a path it would
+/// not write (another extension: `-o notes.txt` removed the user's notes, `-o /dev/null` the
+/// device node), and never the environment map it reads, which an `.exr` output can name (it was
+/// overwritten by a good render and removed by a failed one). Found by a probe, 2026-12-06.
+#[test]
+fn a_render_never_removes_or_overwrites_what_it_does_not_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_shikki"))
+            .env("SHIKKI_PIPELINE_CACHE", "0")
+            .args(args)
+            .current_dir(dir.path())
+            .output()
+            .unwrap()
+    };
+    let path = |name: &str| dir.path().join(name);
+    // Another extension: refused, and the file left as it was (flags and scene file alike).
+    std::fs::write(path("notes.txt"), b"precious").unwrap();
+    std::fs::write(path("bad.toml"), "[camera]\nfov_deg = 500\n").unwrap();
+    for args in [
+        &["render", "-o", "notes.txt", "--size", "8x8"][..],
+        &["render", "bad.toml", "-o", "notes.txt"][..],
+        &["render", "missing.toml", "-o", "notes.txt"][..],
+    ] {
+        let out = run(args);
+        assert!(!out.status.success(), "{args:?}");
+        assert_eq!(
+            std::fs::read(path("notes.txt")).unwrap(),
+            b"precious",
+            "{args:?}"
+        );
+        assert!(!path("notes.exr").exists(), "{args:?}");
+    }
+    // The environment map as the output: refused before rendering, the map untouched, whether
+    // the render would have succeeded or failed.
+    let map = common::synthetic_environment(16, 8);
+    let pixels: Vec<[f32; 4]> = map.pixels.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect();
+    let image = shikki::output::HdrImage {
+        width: 16,
+        height: 8,
+        pixels,
+    };
+    let bytes = shikki::output::exr::encode_exr(&image).unwrap();
+    std::fs::write(path("map.exr"), &bytes).unwrap();
+    std::fs::write(
+        path("env.toml"),
+        "[[object]]\nmesh = \"builtin:sphere\"\n\n[environment]\nsource = \"map.exr\"\n\n\
+         [output]\nsize = \"8x8\"\n",
+    )
+    .unwrap();
+    for args in [
+        &[
+            "render", "--env", "map.exr", "--size", "8x8", "-o", "map.exr",
+        ][..],
+        &[
+            "render", "--env", "map.exr", "--set", "m=5", "-o", "map.exr",
+        ][..],
+        &["render", "env.toml", "-o", "./map.exr"][..],
+        &[
+            "render",
+            "env.toml",
+            "--set",
+            "camera.fov_deg=500",
+            "-o",
+            "map.exr",
+        ][..],
+    ] {
+        let out = run(args);
+        assert!(!out.status.success(), "{args:?}");
+        assert_eq!(std::fs::read(path("map.exr")).unwrap(), bytes, "{args:?}");
+    }
+    let out = run(&[
+        "render", "--env", "map.exr", "--size", "8x8", "-o", "map.exr",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("environment map this render reads"), "{err}");
+    // A file name longer than file systems take: refused before rendering, nothing written.
+    let long = format!("{}.png", "x".repeat(252));
+    let out = run(&["render", "--size", "8x8", "-o", &long]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("256 bytes") && err.contains("nothing was rendered"),
+        "{err}"
+    );
+    assert!(!err.contains("WARNING"), "{err}");
 }

@@ -351,6 +351,121 @@ static void huge_sizes(ShikkiRenderer renderer, ShikkiScene scene) {
     EXPECT_TRUE(shikki_live_handle_count() == before);
 }
 
+/* ---- Values past what the renderer's f32 arithmetic carries (src/model/limits.rs) -----------
+ * Each of these was accepted and drew black, or failed at the render naming the wrong thing
+ * (a probe, 2026-12-06): now refused where it is given, naming the range. */
+static void out_of_range_values(ShikkiScene scene, ShikkiMaterial material) {
+    ShikkiMesh mesh = {0};
+    EXPECT(shikki_mesh_create(octa_positions, NULL, 6, octa_indices, 24, &mesh), SHIKKI_STATUS_OK);
+    EXPECT_MESSAGE(shikki_material_set_beckmann_m(material, 1e-20), SHIKKI_STATUS_INVALID_ARGUMENT,
+                   "[0.001, 1]");
+    EXPECT_MESSAGE(shikki_material_set_diffuse_a(material, 1e39), SHIKKI_STATUS_INVALID_ARGUMENT,
+                   "1e6");
+    EXPECT_MESSAGE(shikki_material_set_lacquer_law(material, 1e39, 0, 0),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "1e6");
+    EXPECT(shikki_material_validate(material), SHIKKI_STATUS_OK); /* unchanged */
+    const double up[3] = {0, 1, 0}, huge[3] = {1e39, 1e39, 1e39}, far_light[3] = {0, 1e16, 0};
+    EXPECT_MESSAGE(shikki_scene_add_directional_light(scene, up, huge),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "1e20");
+    EXPECT_MESSAGE(shikki_scene_add_point_light(scene, far_light, up),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "1e15");
+    const double far_eye[3] = {0, 0, 1e39}, origin[3] = {0, 0, 0};
+    const double eye[3] = {0, 0, 1 + 1e-9}, target[3] = {0, 0, 1};
+    EXPECT_MESSAGE(shikki_scene_set_camera(scene, far_eye, origin, NULL, 40.0),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "1e15");
+    EXPECT_MESSAGE(shikki_scene_set_camera(scene, eye, target, NULL, 40.0),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "differ");
+    EXPECT_MESSAGE(shikki_scene_set_camera(scene, target, origin, NULL, 1e-300),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "fov");
+    /* Column-major placements: flattened 1e30 : 1, collapsed, beyond f32. */
+    const double flat[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1e-30, 0, 0, 0, 0, 1};
+    const double collapsed[16] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1};
+    const double far_away[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 1e39, 0, 1};
+    EXPECT_MESSAGE(shikki_scene_add_object(scene, mesh, material, flat),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "transform");
+    EXPECT_MESSAGE(shikki_scene_add_object(scene, mesh, material, collapsed),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "transform");
+    EXPECT_MESSAGE(shikki_scene_add_object(scene, mesh, material, far_away),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "1e15");
+    /* An environment whose brightest pixel times the intensity is past 1e20. */
+    const float bright[6] = {1e30f, 1e30f, 1e30f, 1, 1, 1};
+    ShikkiEnvironment sun = {0};
+    EXPECT(shikki_environment_create_rgb(2, 1, bright, &sun), SHIKKI_STATUS_OK);
+    EXPECT_MESSAGE(shikki_scene_set_environment(scene, sun, 1.0, 0.0),
+                   SHIKKI_STATUS_INVALID_ARGUMENT, "1e20");
+    EXPECT(shikki_environment_destroy(sun), SHIKKI_STATUS_OK);
+    /* A malformed mesh file is a parse error, as the header says, not an I/O error. */
+    FILE *empty = fopen("empty.obj", "w");
+    if (empty != NULL) {
+        fputs("# no faces\nv 0 0 0\n", empty);
+        fclose(empty);
+    }
+    ShikkiMesh none = {0};
+    EXPECT(shikki_mesh_load("empty.obj", &none), SHIKKI_STATUS_PARSE_ERROR);
+    remove("empty.obj");
+    EXPECT(shikki_mesh_destroy(mesh), SHIKKI_STATUS_OK);
+}
+
+/* ---- Files at the output path --------------------------------------------------------------
+ * A failed render leaves no file at its path, whatever failed (an earlier file there would pass
+ * for its output); `shikki_image_write` refuses invalid arguments before it touches the path. */
+static int exists(const char *path) {
+    FILE *f = fopen(path, "r");
+    if (f != NULL) fclose(f);
+    return f != NULL;
+}
+
+static int file_holds(const char *path, const char *text) {
+    char buffer[64] = {0};
+    FILE *f = fopen(path, "r");
+    if (f == NULL) return 0;
+    size_t n = fread(buffer, 1, sizeof buffer - 1, f);
+    fclose(f);
+    return n == strlen(text) && memcmp(buffer, text, n) == 0;
+}
+
+static void write_text(const char *path, const char *text) {
+    FILE *f = fopen(path, "w");
+    if (f != NULL) {
+        fputs(text, f);
+        fclose(f);
+    }
+}
+
+static void output_files(ShikkiRenderer renderer, ShikkiScene scene) {
+    write_text("stale.png", "old");
+    EXPECT(shikki_render_to_file((ShikkiRenderer){0}, scene, "stale.png"),
+           SHIKKI_STATUS_INVALID_HANDLE);
+    EXPECT_TRUE(!exists("stale.png"));
+    write_text("stale.png", "old");
+    EXPECT(shikki_render_to_file(renderer, (ShikkiScene){0}, "stale.png"),
+           SHIKKI_STATUS_INVALID_HANDLE);
+    EXPECT_TRUE(!exists("stale.png"));
+    /* A path refused is left alone. */
+    write_text("notes.txt", "mine");
+    EXPECT(shikki_render_to_file(renderer, scene, "notes.txt"), SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT_TRUE(file_holds("notes.txt", "mine"));
+    remove("notes.txt");
+    /* Invalid arguments to shikki_image_write: refused, the file as it was. */
+    float pixels[2 * 2 * 4] = {0};
+    pixels[5] = NAN;
+    write_text("mine.png", "mine");
+    EXPECT(shikki_image_write(pixels, 16, 2, 2, 0.0f, SHIKKI_TONE_CURVE_ACES, "mine.png"),
+           SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT_TRUE(file_holds("mine.png", "mine"));
+    pixels[5] = 0.0f;
+    EXPECT(shikki_image_write(pixels, 16, 2, 2, NAN, SHIKKI_TONE_CURVE_ACES, "mine.png"),
+           SHIKKI_STATUS_INVALID_ARGUMENT);
+    EXPECT_TRUE(file_holds("mine.png", "mine"));
+    remove("mine.png");
+    /* A file name over 255 bytes: refused before rendering. */
+    char long_name[300];
+    memset(long_name, 'x', 252);
+    strcpy(long_name + 252, ".png");
+    EXPECT_MESSAGE(shikki_render_to_file(renderer, scene, long_name),
+                   SHIKKI_STATUS_IO_ERROR, "256 bytes");
+}
+
 int main(void) {
     ShikkiRenderer renderer = {0};
     ShikkiMaterial material = {0}, destroyed = {0}, from_toml = {0};
@@ -502,6 +617,8 @@ int main(void) {
         printf("FAIL %zu validation message(s)\n", messages);
     }
     hostile_handles(renderer);
+    out_of_range_values(scene, material);
+    output_files(renderer, scene);
     null_out_pointers();
     invalid_utf8(renderer, scene);
     huge_sizes(renderer, scene);

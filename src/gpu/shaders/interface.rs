@@ -320,11 +320,11 @@ shader_interface! {
             addresses: uvec4,
             /// `SELF_HITS_FRONT_CLEAR` | `SELF_HITS_BACK_CLEAR` of its mesh, or 0.
             clear_sides: uint,
-            /// `SelfHits::slack`: how far a vertex may lie above a face's plane.
-            slack: float,
-            /// Its instance mask bit that its own rays may leave out; 0 where none.
+            /// Its instance mask bit that its own rays leave out where its mesh is convex on
+            /// their side; 0 where none.
             own_mask: uint,
-            unused: uint,
+            unused0: uint,
+            unused1: uint,
         }
 
         /// The apron pass's push constants (layer_apron.comp): one layer of face size M, read

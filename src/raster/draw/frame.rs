@@ -19,7 +19,7 @@ use crate::gpu::shaders::interface::{
 };
 use crate::gpu::{Buffer, BufferUsage, GpuContext};
 use crate::model::{BrdfParams, FresnelTable};
-use crate::raster::camera::Camera;
+use crate::raster::camera::{Camera, SceneSphere};
 use crate::raster::lights::Light;
 use crate::Result;
 use bytemuck::Zeroable;
@@ -241,14 +241,14 @@ impl Frame {
         camera: &Camera,
         width: u32,
         height: u32,
-        scene_radius: f64,
+        scene_sphere: SceneSphere,
         lights: &[Light],
         environment: &EnvironmentUniforms<'_>,
     ) -> Self {
         let (right, up, forward) = camera.basis();
         let mut frame = Frame {
             view_projection: camera
-                .view_projection(width, height, scene_radius)
+                .view_projection(width, height, scene_sphere)
                 .to_cols_array(),
             eye: vec4(camera.eye, 1.0),
             light_count: [lights.len().min(MAX_LIGHTS) as i32, 0, 0, 0],
@@ -381,7 +381,7 @@ impl DrawBuffers {
         scene: &DrawScene<'_>,
         settings: &RenderSettings,
         environment: &GpuEnvironment,
-        (object_knots, object_albedo, scene_radius): (&[Knots], &[Knots], f64),
+        (object_knots, object_albedo, scene_sphere): (&[Knots], &[Knots], SceneSphere),
     ) -> Result<Frame> {
         let brdf_lights = scene
             .reads_brdf_quadrature()
@@ -406,7 +406,7 @@ impl DrawBuffers {
             scene.camera,
             settings.width,
             settings.height,
-            scene_radius,
+            scene_sphere,
             scene.lights,
             &EnvironmentUniforms {
                 enabled: scene.environment.is_some(),

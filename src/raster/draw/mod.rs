@@ -59,8 +59,7 @@ use crate::gpu::{
     Instance, RayTracingPipeline, Sampler, TimestampPool,
 };
 use crate::output::HdrImage;
-use crate::raster::camera::PixelRect;
-use crate::raster::SelfHits;
+use crate::raster::camera::{PixelRect, SceneSphere};
 use crate::{Error, Result};
 use denoise::{denoise, denoise_params, denoise_sigma, DenoisePass};
 use frame::{fresnel_knots, DrawBuffers};
@@ -307,11 +306,9 @@ impl LacquerRenderer {
             .iter()
             .map(|o| fresnel_knots(o.fresnel))
             .collect();
-        let scene_radius = scene
-            .objects
-            .iter()
-            .map(|o| o.mesh.bounding_radius())
-            .fold(0.0, f64::max);
+        let scene_sphere =
+            SceneSphere::around_boxes(scene.objects.iter().filter_map(|o| o.mesh.bounding_box()))
+                .unwrap_or(SceneSphere::from(1.0));
         // The `brdf` model's quadrature normalises by each object's directional albedo A(nv);
         // a ray-traced draw runs it in either model (`integral_environment`).
         let albedo: Vec<Vec<[f32; 4]>> = match scene.reads_brdf_quadrature() {
@@ -327,7 +324,7 @@ impl LacquerRenderer {
             scene,
             settings,
             environment,
-            (&knots, &albedo, scene_radius),
+            (&knots, &albedo, scene_sphere),
         )?;
         // The `brdf` quadrature's layer texels, made on the environment's first such draw.
         let layer_texels = match scene.reads_brdf_quadrature() {
@@ -346,7 +343,7 @@ impl LacquerRenderer {
             layer_texels,
             sampler,
             stamps,
-            scene_radius,
+            scene_sphere,
         };
         let (pipelines, targets) = (&mut self.pipelines, &mut self.targets);
         match options.shading {
@@ -408,7 +405,7 @@ struct DrawInputs<'a> {
     layer_texels: Option<&'a Buffer>,
     sampler: &'a Sampler,
     stamps: Option<&'a TimestampPool>,
-    scene_radius: f64,
+    scene_sphere: SceneSphere,
 }
 
 impl DrawInputs<'_> {
@@ -727,24 +724,9 @@ fn draw_forward(
 /// visibility.glsl `trace_mask`): a bit of its own below `TRACE_MASK_SHARED` for each of the
 /// first seven objects whose mesh some rays cannot meet again, 0 for every other object.
 fn own_masks(meshes: &[&GpuMesh]) -> Vec<u32> {
-    own_mask_bits(meshes.iter().map(|m| (m.triangle_count(), m.self_hits)))
-}
-
-/// [`own_masks`] of meshes given by their triangle counts and classifications.
-fn own_mask_bits(meshes: impl Iterator<Item = (u32, SelfHits)>) -> Vec<u32> {
-    let mut next = 1;
-    meshes
-        .map(|(triangles, hits)| {
-            let clear = triangles > 0 && (hits.front_clear || hits.back_clear);
-            match clear && next < TRACE_MASK_SHARED {
-                true => {
-                    next <<= 1;
-                    next >> 1
-                }
-                false => 0,
-            }
-        })
-        .collect()
+    crate::raster::self_hits::own_mask_bits(
+        meshes.iter().map(|m| (m.triangle_count(), m.self_hits)),
+    )
 }
 
 /// A top-level acceleration structure over `meshes` (instance i is object i, its mask its own
@@ -786,9 +768,9 @@ fn object_geometry(gpu: &GpuContext, meshes: &[&GpuMesh], own: &[u32]) -> Result
                 addresses,
                 clear_sides: u32::from(hits.front_clear) * SELF_HITS_FRONT_CLEAR
                     + u32::from(hits.back_clear) * SELF_HITS_BACK_CLEAR,
-                slack: hits.slack,
                 own_mask,
-                unused: 0,
+                unused0: 0,
+                unused1: 0,
             })
         })
         .collect::<Result<Vec<ObjectGeometry>>>()?;
@@ -836,7 +818,7 @@ fn screen_bounds(inputs: &DrawInputs<'_>) -> PixelRect {
             bounds,
             settings.width,
             settings.height,
-            inputs.scene_radius,
+            inputs.scene_sphere,
         );
         union = Some(match union {
             None => r,
@@ -854,29 +836,4 @@ fn screen_bounds(inputs: &DrawInputs<'_>) -> PixelRect {
         x1: 0,
         y1: 0,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_first_seven_clear_objects_get_a_mask_bit_of_their_own() {
-        let convex = SelfHits {
-            front_clear: true,
-            back_clear: false,
-            slack: 0.0,
-        };
-        let flat = SelfHits {
-            back_clear: true,
-            ..convex
-        };
-        // A bowl, an empty mesh, then nine convex or flat ones.
-        let mut meshes = vec![(100, SelfHits::ANY), (0, convex)];
-        meshes.extend((0..9).map(|i| (12, if i % 2 == 0 { convex } else { flat })));
-        let bits = own_mask_bits(meshes.into_iter());
-        assert_eq!(bits, [0, 0, 1, 2, 4, 8, 16, 32, 64, 0, 0]);
-        // No bit is the shared one, so a ray that leaves its own out still meets the others.
-        assert!(bits.iter().all(|&b| b & TRACE_MASK_SHARED == 0));
-    }
 }

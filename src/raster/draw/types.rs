@@ -230,8 +230,17 @@ pub(crate) fn validate(
             ),
         ));
     }
-    for object in scene.objects {
-        object.mesh.validate()?;
+    for (index, object) in scene.objects.iter().enumerate() {
+        // Named by the object: a placement that overflowed f32 showed as "invalid mesh.positions"
+        // with nothing to say which object's transform did it.
+        object.mesh.validate().map_err(|e| match e {
+            Error::InvalidParameter {
+                field,
+                value,
+                reason,
+            } => Error::invalid(format!("object.{index} {field}"), value, reason),
+            other => other,
+        })?;
     }
     Ok(())
 }

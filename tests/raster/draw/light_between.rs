@@ -454,7 +454,7 @@ fn a_lone_sphere_has_nothing_between() {
     );
     assert!(errors.len() > 4_000);
     assert!(
-        changed * 1000 <= errors.len() && worst <= 0.01,
+        changed == 0,
         "{changed} pixels changed, worst by {worst:.3e}"
     );
     // The denoise filters an integral that is 0 everywhere: the same image, bit for bit.

@@ -462,9 +462,9 @@ fn no_light_leaks_at_the_sphere_board_contact() {
 }
 
 /// A lone sphere: nothing else for its shadow rays to meet, so the image is the one without ray
-/// tracing, except where a ray grazing the terminator (N·L → 0, the light's share of the pixel
-/// tiny) meets the sphere's own tessellation, which is not convex to such rays (measured: 1 pixel
-/// of 6,460, changed by 0.5%).
+/// tracing. A ray grazing the terminator (N·L → 0) that dips under its flat face meets no
+/// triangle of the sphere either: a convex mesh stands for the smooth surface its normals
+/// describe (raster/self_hits.rs). Before that rule 1 pixel of 6,460 changed, by 0.5 %.
 #[test]
 fn a_lone_sphere_renders_as_without_ray_tracing() {
     let Some(gpu) = gpu_or_skip() else { return };
@@ -484,7 +484,7 @@ fn a_lone_sphere_renders_as_without_ray_tracing() {
     );
     assert!(errors.len() > 4_000);
     assert!(
-        changed * 1000 <= errors.len() && worst <= 0.01,
+        changed == 0,
         "{changed} of {} pixels changed by ray tracing, worst by {worst:.3e}",
         errors.len()
     );
