@@ -226,16 +226,18 @@ pub unsafe fn array<T: Copy, const N: usize>(ptr: *const T, name: &str) -> FfiRe
     Ok(out)
 }
 
+/// This thread's last error message, for the crate's tests.
+#[cfg(test)]
+pub(crate) fn last_error() -> String {
+    // SAFETY: last_error_ptr points to this thread's NUL-terminated message.
+    unsafe { CStr::from_ptr(last_error_ptr()) }
+        .to_string_lossy()
+        .into_owned()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn last_error() -> String {
-        // SAFETY: last_error_ptr points to this thread's NUL-terminated message.
-        unsafe { CStr::from_ptr(last_error_ptr()) }
-            .to_string_lossy()
-            .into_owned()
-    }
 
     #[test]
     fn a_panic_becomes_a_status_and_a_message_and_success_clears_it() {

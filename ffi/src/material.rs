@@ -265,17 +265,8 @@ pub extern "C" fn shikki_material_validate(material: ShikkiMaterial) -> ShikkiSt
 
 #[cfg(test)]
 mod tests {
-    use std::ffi::CStr;
-
     use super::*;
-    use crate::boundary::last_error_ptr;
-
-    fn last_error() -> String {
-        // SAFETY: last_error_ptr points to this thread's NUL-terminated message.
-        unsafe { CStr::from_ptr(last_error_ptr()) }
-            .to_string_lossy()
-            .into_owned()
-    }
+    use crate::boundary::last_error;
 
     #[test]
     fn ior_setters_refuse_values_outside_their_range_and_keep_the_material() {

@@ -249,17 +249,8 @@ pub extern "C" fn shikki_mesh_destroy(mesh: ShikkiMesh) -> ShikkiStatus {
 
 #[cfg(test)]
 mod tests {
-    use std::ffi::CStr;
-
     use super::*;
-    use crate::boundary::last_error_ptr;
-
-    fn last_error() -> String {
-        // SAFETY: last_error_ptr points to this thread's NUL-terminated message.
-        unsafe { CStr::from_ptr(last_error_ptr()) }
-            .to_string_lossy()
-            .into_owned()
-    }
+    use crate::boundary::last_error;
 
     #[test]
     fn create_rgb_refuses_maps_smaller_than_the_prefilter_takes() {

@@ -610,17 +610,8 @@ pub unsafe extern "C" fn shikki_scene_get_output(
 
 #[cfg(test)]
 mod tests {
-    use std::ffi::CStr;
-
     use super::*;
-    use crate::boundary::last_error_ptr;
-
-    fn last_error() -> String {
-        // SAFETY: last_error_ptr points to this thread's NUL-terminated message.
-        unsafe { CStr::from_ptr(last_error_ptr()) }
-            .to_string_lossy()
-            .into_owned()
-    }
+    use crate::boundary::last_error;
 
     fn light_count(scene: ShikkiScene) -> usize {
         with_scene(scene, |state| Ok(state.lights.len())).expect("the scene handle is live")
