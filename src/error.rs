@@ -94,6 +94,13 @@ fn compact_number(value: String) -> String {
 pub enum Warning {
     /// Pixel values of an environment map that were NaN, infinite or negative, now 0.
     ReplacedPixels { environment: String, count: usize },
+    /// An environment map whose width is not twice its height: read as equirectangular (SPEC
+    /// §4) all the same, stretched. A mirror-ball or angular map drew a wrong image silently.
+    NotEquirectangular {
+        environment: String,
+        width: u32,
+        height: u32,
+    },
     /// An environment cache file failed a check and was ignored; the next prefilter rewrites it.
     CacheFileInvalid { path: PathBuf, reason: String },
     /// An environment cache file was valid but could not be put on the device.
@@ -112,6 +119,16 @@ impl std::fmt::Display for Warning {
                 f,
                 "{environment}: {count} pixel value(s) were NaN, infinite or negative and were \
                  replaced by 0"
+            ),
+            Warning::NotEquirectangular {
+                environment,
+                width,
+                height,
+            } => write!(
+                f,
+                "{environment} is {width} × {height}, not 2:1: it is read as an equirectangular \
+                 map (longitude across, latitude down) and stretched; convert a mirror-ball, \
+                 angular or cube-cross map to equirectangular first"
             ),
             Warning::CacheFileInvalid { path, reason } => write!(
                 f,

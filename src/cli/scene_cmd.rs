@@ -63,10 +63,7 @@ pub fn render_scene_file(scene_path: &Path, sets: &[String], output_path: &Path)
         .collect();
     let built = document.and_then(|document| scene_and_path(document, sets, output_path));
     match built {
-        Ok((scene, path)) => {
-            let inputs = [inputs, environment_file(&scene).into_iter().collect()].concat();
-            render_built_scene(Ok(scene), &path, &inputs, scene_summary)
-        }
+        Ok((scene, path)) => render_built_scene(Ok(scene), &path, &inputs, scene_summary),
         Err(error) => {
             // The scene failed before its output path (and format) was known: with no `-o` an
             // `[output] format = "exr"` scene writes shikki.exr.

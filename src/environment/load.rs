@@ -397,12 +397,24 @@ pub fn decode_exr(bytes: &[u8], source: &str) -> Result<Equirect> {
         .iter()
         .find(|h| !h.deep && has(h, "R") && has(h, "G") && has(h, "B"))
     else {
+        let found: Vec<String> = meta
+            .headers
+            .iter()
+            .flat_map(|h| h.channels.list.iter().map(|c| c.name.to_string()))
+            .collect();
         return Err(Error::invalid(
             "OpenEXR file",
             source,
-            "no flat layer has R, G and B channels; an environment must be an RGB(A) image",
+            format!(
+                "no flat layer has channels named R, G and B (found {}); an environment must be \
+                 an RGB(A) image: rename the channels, e.g. `oiiotool in.exr --ch R=diffuse.R,\
+                 G=diffuse.G,B=diffuse.B -o out.exr`",
+                found.join(", ")
+            ),
         ));
     };
+    let display = header.shared_attributes.display_window;
+    check_size(source, display.size.width(), display.size.height())?;
     check_size(
         source,
         header.layer_size.width(),
@@ -439,7 +451,40 @@ pub fn decode_exr(bytes: &[u8], source: &str) -> Result<Equirect> {
         .all_attributes()
         .from_buffered(Cursor::new(bytes))
         .map_err(|e| exr_error("cannot decode the pixels", e))?;
-    Ok(image.layer_data.channel_data.pixels)
+    let data = image.layer_data.channel_data.pixels;
+    Ok(in_display_window(
+        data,
+        header.own_attributes.layer_position,
+        display,
+    ))
+}
+
+/// The pixels of the data window placed in the display window, which is the image: outside the
+/// data window 0, data beyond the display window (overscan) cropped. A map whose data window
+/// covered a band of the display window was stretched over the whole sphere (a probe,
+/// 2026-12-06).
+fn in_display_window(
+    data: Equirect,
+    data_position: exr::math::Vec2<i32>,
+    display: exr::meta::attribute::IntegerBounds,
+) -> Equirect {
+    let (width, height) = (display.size.width(), display.size.height());
+    let offset = (
+        i64::from(data_position.x()) - i64::from(display.position.x()),
+        i64::from(data_position.y()) - i64::from(display.position.y()),
+    );
+    if offset == (0, 0) && (data.width as usize, data.height as usize) == (width, height) {
+        return data;
+    }
+    let mut image = Equirect::constant(width as u32, height as u32, [0.0; 3]);
+    for (i, pixel) in data.pixels.iter().enumerate() {
+        let x = (i % data.width as usize) as i64 + offset.0;
+        let y = (i / data.width as usize) as i64 + offset.1;
+        if (0..width as i64).contains(&x) && (0..height as i64).contains(&y) {
+            image.pixels[y as usize * width + x as usize] = *pixel;
+        }
+    }
+    image
 }
 
 #[cfg(test)]
@@ -458,6 +503,52 @@ mod tests {
 
     fn error_text(result: Result<impl std::fmt::Debug>) -> String {
         result.expect_err("must fail").to_string()
+    }
+
+    #[test]
+    fn an_exr_without_flat_rgb_channels_lists_what_it_has() {
+        use exr::prelude::*;
+        let channel = AnyChannel::new("diffuse.R", FlatSamples::F32(vec![0.5; 8]));
+        let layer = Layer::new(
+            (4, 2),
+            LayerAttributes::default(),
+            Encoding::UNCOMPRESSED,
+            AnyChannels::sort(SmallVec::from_vec(vec![channel])),
+        );
+        let mut bytes = Vec::new();
+        Image::from_layer(layer)
+            .write()
+            .to_buffered(Cursor::new(&mut bytes))
+            .unwrap();
+        let message = error_text(decode_exr(&bytes, "aov.exr"));
+        assert!(
+            message.contains("found diffuse.R") && message.contains("oiiotool"),
+            "{message}"
+        );
+    }
+
+    #[test]
+    fn an_exr_data_window_is_placed_in_its_display_window() {
+        use exr::math::Vec2;
+        use exr::meta::attribute::IntegerBounds;
+        // A 4 × 2 display; data 2 × 1 pixels numbered 1, 2.
+        let data = Equirect {
+            width: 2,
+            height: 1,
+            pixels: vec![[1.0; 3], [2.0; 3]],
+        };
+        let display = IntegerBounds::new(Vec2(10, -5), Vec2(4, 2));
+        let green = |image: &Equirect| image.pixels.iter().map(|p| p[1]).collect::<Vec<_>>();
+        // A band: data at display (1, 1).
+        let band = in_display_window(data.clone(), Vec2(11, -4), display);
+        assert_eq!((band.width, band.height), (4, 2));
+        assert_eq!(green(&band), [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 2.0, 0.0]);
+        // Overscan: the first data pixel left of the display is cropped.
+        let over = in_display_window(data.clone(), Vec2(9, -5), display);
+        assert_eq!(green(&over), [2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        // The same window: the data as it is.
+        let same = IntegerBounds::new(Vec2(3, 3), Vec2(2, 1));
+        assert_eq!(in_display_window(data.clone(), Vec2(3, 3), same), data);
     }
 
     #[test]

@@ -224,14 +224,26 @@ impl EnvironmentPreparer {
         Ok(env)
     }
 
+    /// What a map's loading found (replaced pixels; a shape that is not 2:1), once per map.
     fn note_replaced_pixels(&mut self, loaded: &LoadedEnvironment, warnings: &mut Vec<Warning>) {
-        if loaded.replaced_pixels > 0 && !self.warned.contains(&loaded.source) {
+        if self.warned.contains(&loaded.source) {
+            return;
+        }
+        if loaded.replaced_pixels > 0 {
             warnings.push(Warning::ReplacedPixels {
                 environment: loaded.source.clone(),
                 count: loaded.replaced_pixels,
             });
-            self.warned.push(loaded.source.clone());
         }
+        let (width, height) = (loaded.image.width, loaded.image.height);
+        if u64::from(width) != 2 * u64::from(height) {
+            warnings.push(Warning::NotEquirectangular {
+                environment: loaded.source.clone(),
+                width,
+                height,
+            });
+        }
+        self.warned.push(loaded.source.clone());
     }
 
     /// The disk cache's copy, on the device; a file that cannot be read or uploaded costs a

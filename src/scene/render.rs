@@ -134,7 +134,7 @@ impl SceneRenderer {
     /// The warnings of the renders so far (oldest first), removed from the renderer: the
     /// caller prints or forwards them.
     pub fn take_warnings(&mut self) -> Vec<Warning> {
-        std::mem::take(&mut self.warnings)
+        once_each(std::mem::take(&mut self.warnings))
     }
 
     /// Draws `scene` and returns linear radiance (RGBA, alpha = coverage).
@@ -387,5 +387,32 @@ fn placement_checked(index: usize, transform: glam::DMat4) -> Result<()> {
             "its transform",
             reason,
         )),
+    }
+}
+
+/// `warnings` with each repeat left out, in first-seen order: a map and its bright splits are
+/// cached alike, and a cache that could not be written said so three times a render (a probe of
+/// the C API, 2026-12-06).
+fn once_each(warnings: Vec<Warning>) -> Vec<Warning> {
+    let mut kept: Vec<Warning> = Vec::with_capacity(warnings.len());
+    for warning in warnings {
+        if !kept.contains(&warning) {
+            kept.push(warning);
+        }
+    }
+    kept
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_warning_is_returned_once() {
+        let cache = |reason: &str| Warning::CacheNotWritten {
+            reason: reason.into(),
+        };
+        let warnings = vec![cache("a"), cache("b"), cache("a"), cache("a")];
+        assert_eq!(once_each(warnings), [cache("a"), cache("b")]);
     }
 }

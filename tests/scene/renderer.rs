@@ -131,6 +131,39 @@ fn warnings_are_returned_once_per_map_and_never_printed() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A map that is not 2:1 is drawn as equirectangular all the same, with a warning naming its
+/// size: a 1:1 mirror-ball or angular map drew a stretched image without a word (a probe,
+/// 2026-12-06).
+#[test]
+fn a_map_that_is_not_two_to_one_is_named_in_a_warning() {
+    let dir = scratch("renderer-square-map");
+    let path = dir.join("square.exr");
+    let image = HdrImage {
+        width: 16,
+        height: 16,
+        pixels: vec![[0.5, 0.5, 0.5, 1.0]; 256],
+    };
+    std::fs::write(&path, encode_exr(&image).unwrap()).unwrap();
+    let scene = small_scene(EnvironmentSpec::named(path.display().to_string()));
+    let gpu = validated_gpu();
+    let mut renderer = SceneRenderer::with_disk_cache(None);
+    renderer.render(&gpu, &scene).unwrap();
+    let warnings = renderer.take_warnings();
+    let named = warnings.iter().filter(|w| {
+        matches!(
+            w,
+            Warning::NotEquirectangular {
+                width: 16,
+                height: 16,
+                ..
+            }
+        ) && w.to_string().contains("16 × 16, not 2:1")
+    });
+    assert_eq!(named.count(), 1, "{warnings:?}");
+    assert_no_validation_messages(&gpu);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Every numeric key, set from a scene file's number, holds exactly that number — including
 /// values whose shortest decimal form has 17 digits.
 #[test]

@@ -491,7 +491,21 @@ fn crate_error(path: &Path, error: ::gltf::Error) -> Error {
             } else {
                 String::new()
             };
-            content_error(path, format!("invalid glTF: {}{tail}", quoted.join("; ")))
+            // An extension the file requires is not an invalid file: say what to do about it.
+            let unsupported = errors
+                .iter()
+                .any(|(_, what)| matches!(what, ::gltf::json::validation::Error::Unsupported));
+            let hint = match unsupported {
+                true => {
+                    "; shikki reads core glTF 2.0: re-export without the extension (for \
+                     KHR_mesh_quantization: `gltf-transform dequantize in.glb out.glb`)"
+                }
+                false => "",
+            };
+            content_error(
+                path,
+                format!("invalid glTF: {}{tail}{hint}", quoted.join("; ")),
+            )
         }
         other => content_error(path, format!("not a readable glTF/GLB file: {other}")),
     }

@@ -109,6 +109,9 @@ struct ObjFilter<'a, R> {
     /// 1-based number of the last line read.
     line: usize,
     raw: Vec<u8>,
+    /// The lines so far of a statement continued by a trailing `\` (the OBJ format's line
+    /// continuation), joined by spaces.
+    continued: String,
     out: Vec<u8>,
     out_pos: usize,
     counts: Counts,
@@ -122,6 +125,7 @@ impl<'a, R: BufRead> ObjFilter<'a, R> {
             file,
             line: 0,
             raw: Vec::new(),
+            continued: String::new(),
             out: Vec::new(),
             out_pos: 0,
             counts: Counts::default(),
@@ -147,6 +151,11 @@ impl<'a, R: BufRead> ObjFilter<'a, R> {
                     source,
                 })?;
             if read == 0 {
+                // A file whose last line ends in `\`: the statement ends with the file.
+                if !self.continued.is_empty() {
+                    let statement = std::mem::take(&mut self.continued);
+                    self.emit(&statement)?;
+                }
                 return Ok(());
             }
             self.line += 1;
@@ -165,12 +174,37 @@ impl<'a, R: BufRead> ObjFilter<'a, R> {
                 1 => text.strip_prefix('\u{feff}').unwrap_or(text),
                 _ => text,
             };
-            let canonical = self.check_line(text)?;
-            self.raw = raw;
-            if let Some(canonical) = canonical {
-                self.out.extend_from_slice(canonical.as_bytes());
-                self.out.push(b'\n');
+            // A line ending in `\` continues on the next (a valid OBJ was refused as "a vertex
+            // needs three numbers ... found \"0 \\\"").
+            let content = text.split('#').next().unwrap_or("").trim_end();
+            if let Some(head) = content.strip_suffix('\\') {
+                self.continued.push_str(head);
+                self.continued.push(' ');
+                self.raw = raw;
+                if self.continued.len() as u64 > MAX_LINE_BYTES {
+                    return Err(self.parse_error(format!(
+                        "a statement continued with `\\` runs past {MAX_LINE_BYTES} bytes"
+                    )));
+                }
+                continue;
             }
+            match self.continued.is_empty() {
+                true => self.emit(text)?,
+                false => {
+                    let statement = std::mem::take(&mut self.continued) + text;
+                    self.emit(&statement)?;
+                }
+            }
+            self.raw = raw;
+        }
+        Ok(())
+    }
+
+    /// Checks one statement and queues its canonical line, if it has one.
+    fn emit(&mut self, statement: &str) -> Result<()> {
+        if let Some(canonical) = self.check_line(statement)? {
+            self.out.extend_from_slice(canonical.as_bytes());
+            self.out.push(b'\n');
         }
         Ok(())
     }
@@ -367,5 +401,14 @@ mod tests {
             .to_string();
         assert!(error.contains("bom.obj:4: "), "{error}");
         assert!(error.contains("vertex index 3 is out of range"), "{error}");
+    }
+
+    #[test]
+    fn a_trailing_backslash_continues_the_statement() {
+        let joined = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\n";
+        let continued = "v 0 \\\n 0 0\nv 1 0 0 \\\r\n\nv 0 1 0\nv 0 0 1\nf 1 2 \\\n3\nf 1 3 4 \\";
+        let (a, _) = load_text(joined).expect("plain lines");
+        let (b, _) = load_text(continued).expect("continued lines");
+        assert_eq!((a.positions, a.indices), (b.positions, b.indices));
     }
 }

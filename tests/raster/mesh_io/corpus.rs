@@ -598,3 +598,22 @@ fn mesh_file_larger_than_the_limit_is_refused_before_reading() {
     );
     cli_refuses(&ws, "terabyte.glb", &["terabyte.glb"]);
 }
+
+/// An extension the file requires (KHR_mesh_quantization here) gets the fix, not only the
+/// crate's "Unsupported extension" (a probe, 2026-12-06).
+#[test]
+fn a_required_gltf_extension_names_the_fix() {
+    let ws = Workspace::new();
+    let text = Gltf::triangle().embedded();
+    let required = text.replacen(
+        '{',
+        r#"{"extensionsUsed":["KHR_mesh_quantization"],"extensionsRequired":["KHR_mesh_quantization"],"#,
+        1,
+    );
+    let path = ws.file("quantized.gltf", required);
+    let message = content_error(load_mesh(&path), &path);
+    assert_names(
+        &message,
+        &["KHR_mesh_quantization", "re-export without the extension"],
+    );
+}
