@@ -352,13 +352,9 @@ pub unsafe extern "C" fn shikki_render_to_file(
         // The path is one this call writes (checked above): an earlier file there would pass
         // for this call's output, so any failure from here on removes it and says so.
         written.map_err(|mut error| {
-            if let Ok(true) = output::atomic::discard_stale_output(path) {
-                error.message.push_str(&format!(
-                    "; the previous {} was removed so it cannot be mistaken for this call's \
-                     output",
-                    path.display()
-                ));
-            }
+            error
+                .message
+                .push_str(&output::atomic::discard_stale_saying(path));
             error
         })
     })

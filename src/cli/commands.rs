@@ -7,7 +7,7 @@ use super::directions;
 use super::scene_cmd;
 use crate::compute::BrdfEvaluator;
 use crate::environment::gpu::{default_params, GpuPrefilter};
-use crate::environment::load::{load_environment, LoadedEnvironment};
+use crate::environment::load::{environment_file, load_environment, LoadedEnvironment};
 use crate::environment::{EnvironmentLight, EnvironmentSource, PrefilterParams};
 use crate::model::{lacquer_brdf, LacquerMaterial};
 use crate::output::{self, PngSettings};
@@ -140,9 +140,8 @@ fn render(args: RenderArgs) -> Result<()> {
     let scene = scene_from_flags(&args);
     let preset = &args.material.preset;
     // The map `--env` names, even if the scene fails to build: never written over or removed.
-    let inputs: Vec<_> = Some(&args.environment.env)
-        .filter(|env| !env.starts_with("builtin:") && env.as_str() != "none")
-        .map(std::path::PathBuf::from)
+    let inputs: Vec<_> = environment_file(&args.environment.env)
+        .map(std::path::Path::to_path_buf)
         .into_iter()
         .collect();
     scene_cmd::render_built_scene(scene, &args.output, &inputs, |scene, device| {
@@ -236,12 +235,7 @@ fn prefilter(args: PrefilterArgs) -> Result<()> {
         stale.extend(["irradiance.exr", "preview.png"].map(|f| args.output.join(f)));
     }
     for path in stale {
-        if let Ok(true) = output::atomic::discard_stale_output(&path) {
-            eprintln!(
-                "removed {} from an earlier run: it is not this run's output",
-                path.display()
-            );
-        }
+        super::remove_earlier_output(&path);
     }
     result.map(|_| ())
 }

@@ -3,7 +3,6 @@
 //! `raster::mesh_io::export`'s.
 
 use super::args::MeshArgs;
-use crate::output::atomic::discard_stale_output;
 use crate::raster::mesh::BuiltinMesh;
 use crate::raster::mesh_io::{write_mesh, MeshFileFormat};
 use crate::Result;
@@ -13,14 +12,7 @@ use crate::Result;
 /// anything else and left alone: no earlier `shikki mesh` can have written it.
 pub fn run_mesh(args: MeshArgs) -> Result<()> {
     MeshFileFormat::from_path(&args.output)?;
-    export(&args).inspect_err(|_| {
-        if let Ok(true) = discard_stale_output(&args.output) {
-            eprintln!(
-                "removed {} from an earlier run: it is not this run's output",
-                args.output.display()
-            );
-        }
-    })
+    export(&args).inspect_err(|_| super::remove_earlier_output(&args.output))
 }
 
 fn export(args: &MeshArgs) -> Result<()> {

@@ -59,6 +59,18 @@ pub(crate) fn print_warnings(warnings: impl IntoIterator<Item = crate::Warning>)
     }
 }
 
+/// Removes an earlier run's output at `path` after a failure, and says so on stderr: it would
+/// pass for this run's. Only a regular file is removed (`output::atomic::discard_stale_output`);
+/// the caller decides that `path` is one this command writes.
+pub(crate) fn remove_earlier_output(path: &std::path::Path) {
+    if let Ok(true) = crate::output::atomic::discard_stale_output(path) {
+        eprintln!(
+            "removed {} from an earlier run: it is not this run's output",
+            path.display()
+        );
+    }
+}
+
 impl std::ops::Deref for CliGpu {
     type Target = crate::gpu::GpuContext;
     fn deref(&self) -> &Self::Target {

@@ -10,6 +10,7 @@ use std::sync::Arc;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::args::{BatchArgs, RenderArgs};
+use crate::environment::load;
 use crate::environment::EnvironmentSource;
 use crate::output::{self, OutputFormat, PngSettings};
 use crate::scene::batch::{self, BatchOptions, BatchPlan};
@@ -122,11 +123,7 @@ pub fn render_built_scene(
     summary: impl FnOnce(&Scene, &str) -> String,
 ) -> Result<()> {
     let inputs = match &scene {
-        Ok(scene) => [
-            inputs.to_vec(),
-            environment_file(scene).into_iter().collect(),
-        ]
-        .concat(),
+        Ok(scene) => [inputs.to_vec(), map_file(scene).into_iter().collect()].concat(),
         Err(_) => inputs.to_vec(),
     };
     if let Some(input) = inputs.iter().find(|input| same_file(path, input)) {
@@ -148,12 +145,12 @@ pub fn render_built_scene(
 }
 
 /// The environment map `scene` reads from a file, if it reads one.
-fn environment_file(scene: &Scene) -> Option<PathBuf> {
+fn map_file(scene: &Scene) -> Option<PathBuf> {
     match &scene.environment {
         EnvironmentSpec::Map {
             source: EnvironmentSource::Named(name),
             ..
-        } if !name.starts_with("builtin:") => Some(PathBuf::from(name)),
+        } => load::environment_file(name).map(Path::to_path_buf),
         _ => None,
     }
 }
@@ -170,14 +167,8 @@ fn same_file(a: &Path, b: &Path) -> bool {
 /// writes is ever removed: a path without a .png or .exr extension was refused, not written, and
 /// is left alone, as is an input of the render (an .exr environment map).
 fn discard_stale(path: &Path, inputs: &[PathBuf]) {
-    if OutputFormat::from_path(path).is_err() || inputs.iter().any(|i| same_file(path, i)) {
-        return;
-    }
-    if let Ok(true) = output::atomic::discard_stale_output(path) {
-        eprintln!(
-            "removed {} from an earlier run: it is not this run's output",
-            path.display()
-        );
+    if OutputFormat::from_path(path).is_ok() && !inputs.iter().any(|i| same_file(path, i)) {
+        super::remove_earlier_output(path);
     }
 }
 

@@ -43,6 +43,13 @@ pub struct LoadedEnvironment {
     pub source: String,
 }
 
+/// The file an environment `spec` names: None for a built-in (`builtin:…`) or `none`. A render
+/// must neither write its image over that file nor remove it as a failed run's output.
+pub fn environment_file(spec: &str) -> Option<&Path> {
+    let named = !spec.starts_with("builtin:") && !spec.eq_ignore_ascii_case("none");
+    named.then(|| Path::new(spec))
+}
+
 /// Loads `spec`: a path ending in `.hdr` or `.exr` (any case), or `builtin:studio`.
 pub fn load_environment(spec: &str) -> Result<LoadedEnvironment> {
     if spec == BUILTIN_STUDIO {

@@ -53,7 +53,16 @@ pub fn discard_stale_output(path: &Path) -> io::Result<bool> {
 /// Builds the [`Error::Write`] for a failed write of `path`, applying the stale-file policy and
 /// saying in the message what became of any previous file.
 pub(crate) fn failed_write(path: &Path, cause: &str) -> Error {
-    let stale = match discard_stale_output(path) {
+    Error::Write {
+        path: path.to_path_buf(),
+        message: format!("{cause}; nothing was written{}", discard_stale_saying(path)),
+    }
+}
+
+/// [`discard_stale_output`] for a failed run's message: what became of a previous file at
+/// `path`, as a clause to append ("; the previous … was removed …"), or "" where there was none.
+pub fn discard_stale_saying(path: &Path) -> String {
+    match discard_stale_output(path) {
         Ok(true) => format!(
             "; the previous {} was removed so it cannot be mistaken for this run's output",
             path.display()
@@ -63,10 +72,6 @@ pub(crate) fn failed_write(path: &Path, cause: &str) -> Error {
             "; WARNING: the previous {} could not be removed ({e}) and is NOT this run's output",
             path.display()
         ),
-    };
-    Error::Write {
-        path: path.to_path_buf(),
-        message: format!("{cause}; nothing was written{stale}"),
     }
 }
 

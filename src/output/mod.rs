@@ -77,17 +77,15 @@ pub fn preflight_output(path: &Path) -> Result<OutputFormat> {
 /// leaves `path` as it was. A failure after that removes a previous file at `path` and says so
 /// in the error (stale-file policy in [`atomic`]).
 pub fn write_image(path: &Path, image: &HdrImage, settings: &PngSettings) -> Result<()> {
-    let format = OutputFormat::from_path(path)?;
-    image.validate_for_encoding()?;
-    if format == OutputFormat::Png {
-        settings.validate()?;
-    }
-    let encoded = match format {
+    let encoded = OutputFormat::from_path(path).and_then(|format| match format {
         OutputFormat::Png => png::encode_png(image, settings),
         OutputFormat::Exr => exr::encode_exr(image),
-    };
+    });
     match encoded {
         Ok(bytes) => atomic::write_atomically(path, &bytes),
+        // The extension and the encoders' own checks of the image and settings: the caller's
+        // arguments, refused with `path` as it was.
+        Err(invalid @ Error::InvalidParameter { .. }) => Err(invalid),
         Err(cause) => Err(atomic::failed_write(path, &cause.to_string())),
     }
 }

@@ -14,7 +14,7 @@ use glam::{DMat4, DQuat, DVec3, EulerRot};
 use super::doc::{self, Entry, Node, Origin, Value};
 use super::sections::{environment, light, output, render};
 use super::{EnvironmentSpec, MeshSource, OutputSpec, RenderSpec, Scene, SceneObject};
-use crate::environment::load::BUILTIN_STUDIO;
+use crate::environment::load::{environment_file, BUILTIN_STUDIO};
 use crate::model::fresnel::FresnelTable;
 use crate::model::limits;
 use crate::model::material::{MaterialValue, MATERIAL_KEYS};
@@ -137,9 +137,7 @@ impl SceneDocument {
     pub fn environment_file(&self) -> Option<PathBuf> {
         let source = table_get(&self.root, "environment").and_then(|e| table_get(e, "source"))?;
         match &source.value {
-            Value::Str(s) if !s.starts_with("builtin:") && s != "none" => {
-                Some(doc::resolve_path(&source.at, s))
-            }
+            Value::Str(s) => environment_file(s).map(|_| doc::resolve_path(&source.at, s)),
             _ => None,
         }
     }
@@ -479,13 +477,9 @@ fn matrix(node: &Node) -> Result<DMat4> {
     if m[3] != [0.0, 0.0, 0.0, 1.0] {
         return Err(wrong());
     }
-    let matrix = DMat4::from_cols_array_2d(&m).transpose();
-    if matrix.determinant().abs() < 1e-12 {
-        return Err(node
-            .at
-            .error("`transform` is singular (determinant 0): it flattens the mesh"));
-    }
-    Ok(matrix)
+    // A singular or degenerate matrix is refused with every other placement, in `object`
+    // (`limits::placement_problem`).
+    Ok(DMat4::from_cols_array_2d(&m).transpose())
 }
 
 /// Meshes read from files, kept for the life of the process keyed by path, size and modification
