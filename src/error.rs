@@ -32,6 +32,17 @@ pub enum Error {
         #[source]
         source: std::io::Error,
     },
+    /// A file named at a line of another could not be read (a scene's mesh or material file, a
+    /// material's Fresnel table): located like [`Error::Parse`], but an I/O failure (the C
+    /// API's `SHIKKI_IO_ERROR`), not malformed text. `message` quotes the read's error.
+    #[error("{file}:{line}: {message}")]
+    ReadNamedAt {
+        file: String,
+        line: usize,
+        message: String,
+        #[source]
+        source: std::io::Error,
+    },
     /// Writing an output failed; no partial file was left behind.
     #[error("cannot write {path}: {message}")]
     Write { path: PathBuf, message: String },
@@ -60,6 +71,26 @@ impl Error {
         }
     }
 
+    /// This error as found at `file:line`, its message after `prefix` (a column): a file that
+    /// could not be read stays a read failure ([`Error::ReadNamedAt`]); anything else, content
+    /// included, is a parse error there.
+    pub fn located_at(self, file: &str, line: usize, prefix: &str) -> Self {
+        let message = format!("{prefix}{self}");
+        match self {
+            Error::Read { source, .. } | Error::ReadNamedAt { source, .. }
+                if source.kind() != std::io::ErrorKind::InvalidData =>
+            {
+                Error::ReadNamedAt {
+                    file: file.into(),
+                    line,
+                    message,
+                    source,
+                }
+            }
+            _ => Error::parse(file, line, message),
+        }
+    }
+
     /// Shorthand for [`Error::Parse`].
     pub fn parse(file: impl Into<String>, line: usize, message: impl Into<String>) -> Self {
         Error::Parse {
@@ -78,6 +109,12 @@ pub fn show_number(x: f64) -> String {
         true => format!("{x:e}"),
         false => plain,
     }
+}
+
+/// Numbers as [`show_number`] writes them, in brackets: `[1, 2.5, 1e300]`.
+pub fn show_numbers(xs: &[f64]) -> String {
+    let shown: Vec<String> = xs.iter().map(|&x| show_number(x)).collect();
+    format!("[{}]", shown.join(", "))
 }
 
 /// `value` as [`show_number`] writes it where it is one long number, else unchanged.

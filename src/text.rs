@@ -63,6 +63,16 @@ pub fn nearest<'a>(candidates: &[&'a str], got: &str) -> Option<&'a str> {
         .min_by_key(|candidate| edit_distance(candidate, got))
 }
 
+/// `spec` after its `builtin:` prefix, or `None` where it has none. Names (built-ins, presets,
+/// models, light kinds, tone curves, formats, `none`) are read without regard to ASCII case in
+/// every input; paths are not names.
+pub fn builtin_name(spec: &str) -> Option<&str> {
+    const PREFIX: &str = "builtin:";
+    let head = spec.get(..PREFIX.len())?;
+    head.eq_ignore_ascii_case(PREFIX)
+        .then(|| &spec[PREFIX.len()..])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -43,7 +43,9 @@ impl From<shikki::Error> for FfiError {
             {
                 ShikkiStatus::ParseError
             }
-            shikki::Error::Read { .. } | shikki::Error::Write { .. } => ShikkiStatus::IoError,
+            shikki::Error::Read { .. }
+            | shikki::Error::ReadNamedAt { .. }
+            | shikki::Error::Write { .. } => ShikkiStatus::IoError,
             shikki::Error::Gpu(_) => ShikkiStatus::GpuError,
             shikki::Error::Internal(_) => ShikkiStatus::Internal,
         };

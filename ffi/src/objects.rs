@@ -204,12 +204,7 @@ pub unsafe extern "C" fn shikki_mesh_create_builtin(
         check_out(out, "out")?;
         // SAFETY: the caller's contract above.
         let name = unsafe { c_str(name, "name") }?;
-        let spec = if name.starts_with("builtin:") {
-            name.to_string()
-        } else {
-            format!("builtin:{name}")
-        };
-        let mesh = BuiltinMesh::parse(&spec)?.mesh();
+        let mesh = BuiltinMesh::parse(name)?.mesh();
         let handle = handles::insert::<ShikkiMesh, _>(Arc::new(mesh));
         // SAFETY: checked non-NULL; valid for one write by contract.
         unsafe { write_out(out, "out", handle) }

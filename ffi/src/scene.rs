@@ -8,6 +8,7 @@
 
 use glam::{DMat4, DVec3};
 use shikki::environment::{EnvironmentLight, EnvironmentSource};
+use shikki::error::{show_number, show_numbers};
 use shikki::model::limits;
 use shikki::model::LacquerMaterial;
 use shikki::output::ToneCurve;
@@ -188,11 +189,15 @@ pub unsafe extern "C" fn shikki_scene_add_directional_light(
         // SAFETY: the caller's contract above.
         let irradiance = vec3(unsafe { array(irradiance, "irradiance") }?);
         if let Some(reason) = limits::coordinate_problem(direction) {
-            return Err(FfiError::invalid(format!("to_light {direction}: {reason}")));
+            return Err(FfiError::invalid(format!(
+                "to_light {}: {reason}",
+                show_numbers(&direction.to_array())
+            )));
         }
         let to_light = direction.try_normalize().ok_or_else(|| {
             FfiError::invalid(format!(
-                "to_light {direction}: the direction must be finite and non-zero"
+                "to_light {}: the direction must be finite and non-zero",
+                show_numbers(&direction.to_array())
             ))
         })?;
         add_light(
@@ -298,7 +303,8 @@ pub extern "C" fn shikki_scene_set_environment(
         } else {
             if !(intensity.is_finite() && intensity >= 0.0) {
                 return Err(FfiError::invalid(format!(
-                    "environment intensity {intensity}: must be finite and ≥ 0 (1 = as stored)"
+                    "environment intensity {}: must be finite and ≥ 0 (1 = as stored)",
+                    show_number(intensity)
                 )));
             }
             if !rotation_deg.is_finite() {

@@ -156,9 +156,15 @@ float beckmann_d(vec3 n, vec3 h, float nh, float m) {
     }
     vec3 c = cross(n, h);
     float nh2 = nh * nh;
-    float tan2 = dot(c, c) / nh2;
     float m2 = m * m;
-    return exp(-tan2 / m2) / (PI * m2 * nh2 * nh2);
+    // nh⁴ underflows to 0 for nh below ~1e-10, where exp is 0 too: 0/0 was NaN (an audit's
+    // nv = nl = 6e-17, 2026-12-06). D there is below exp(-1e19), i.e. 0.
+    float denominator = PI * m2 * nh2 * nh2;
+    if (denominator <= 0.0) {
+        return 0.0;
+    }
+    float tan2 = dot(c, c) / nh2;
+    return exp(-tan2 / m2) / denominator;
 }
 
 // Cook-Torrance geometric attenuation.
@@ -194,7 +200,9 @@ vec3 lacquer_brdf_view(LacquerParams p, vec3 n, vec3 v, vec3 l, vec2 nv2, vec3 f
     float d = beckmann_d(n, h, nh, p.beckmann_m);
     float g = cook_torrance_g(nh, nv, nl, vh);
     vec3 f = lacquer_fresnel(p, angle_deg_of_cos(vh));
-    vec3 f_spec = f * (d * g / (4.0 * nv * nl));
+    // 4·nv·nl underflows below nv·nl ~ 3e-39, where G (≤ 2·nh·min(nv, nl)/vh) makes d·g 0 too.
+    float denominator = 4.0 * nv * nl;
+    vec3 f_spec = denominator > 0.0 ? f * (d * g / denominator) : vec3(0.0);
     return f_diff + f_spec;
 }
 

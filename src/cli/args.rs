@@ -33,7 +33,7 @@ pub enum Command {
     Render(RenderArgs),
     /// Evaluate f_r for direction triples read from a CSV (columns nx,ny,nz,vx,vy,vz,lx,ly,lz).
     Brdf(BrdfArgs),
-    /// Print the Fresnel table of a material as angle_deg,r,g,b for 0..90 degrees.
+    /// Print a material's Fresnel table as angle_deg,r,g,b (whole degrees 0..90; a CSV's own angles).
     Fresnel(MaterialArgs),
     /// Print the Vulkan device, driver and the limits shikki relies on.
     Info,

@@ -14,6 +14,7 @@ use std::path::Path;
 use exr::prelude::{read, Compression, MetaData, ReadChannels, ReadLayers};
 
 use super::image::Equirect;
+use crate::text::builtin_name;
 use crate::{Error, Result};
 
 /// The spec that selects the embedded environment (the CLI's default).
@@ -46,13 +47,13 @@ pub struct LoadedEnvironment {
 /// The file an environment `spec` names: None for a built-in (`builtin:…`) or `none`. A render
 /// must neither write its image over that file nor remove it as a failed run's output.
 pub fn environment_file(spec: &str) -> Option<&Path> {
-    let named = !spec.starts_with("builtin:") && !spec.eq_ignore_ascii_case("none");
+    let named = builtin_name(spec).is_none() && !spec.eq_ignore_ascii_case("none");
     named.then(|| Path::new(spec))
 }
 
 /// Loads `spec`: a path ending in `.hdr` or `.exr` (any case), or `builtin:studio`.
 pub fn load_environment(spec: &str) -> Result<LoadedEnvironment> {
-    if spec == BUILTIN_STUDIO {
+    if spec.eq_ignore_ascii_case(BUILTIN_STUDIO) {
         return sanitized(decode_hdr(STUDIO_HDR, spec)?, spec);
     }
     let extension = Path::new(spec)

@@ -114,12 +114,7 @@ pub fn coordinate_problem(v: glam::DVec3) -> Option<String> {
 }
 
 fn show_vec(v: glam::DVec3) -> String {
-    format!(
-        "[{}, {}, {}]",
-        show_number(v.x),
-        show_number(v.y),
-        show_number(v.z)
-    )
+    crate::error::show_numbers(&v.to_array())
 }
 
 fn show_lengths(l: [f64; 3]) -> String {

@@ -110,7 +110,8 @@ const ROUGH: Finish = Finish {
 impl LacquerMaterial {
     /// The preset `name` (one of [`PRESET_NAMES`]).
     pub fn preset(name: &str) -> Result<Self> {
-        let (finish, colorant) = name.split_once('-').unwrap_or((name, "black"));
+        let lower = name.to_ascii_lowercase();
+        let (finish, colorant) = lower.split_once('-').unwrap_or((&lower, "black"));
         let finish = match finish {
             "smooth" => Some(&SMOOTH),
             "rough" => Some(&ROUGH),
@@ -296,11 +297,17 @@ impl LacquerMaterial {
                     "g(r) = c0 + c1·r + c2·r² has its minimum at r* = {r_max} < 1, so no r is in \
                      the fitted domain [1, r*]; fix c0, c1, c2 or set extrapolate_g = true"
                 )
-            } else {
+            } else if r_max.is_finite() {
                 format!(
-                    "must be in [1, {r_max}] (the paper fitted g(r) from r = 1 up to its minimum \
-                     r* = -c1/(2·c2)); use a value in that range or set extrapolate_g = true"
+                    "must be in [1, {}] (the paper fitted g(r) from r = 1 up to its minimum \
+                     r* = -c1/(2·c2)); use a value in that range or set extrapolate_g = true",
+                    crate::error::show_number(r_max)
                 )
+            } else {
+                // c2 <= 0: g has no minimum, so the fitted domain has no upper end.
+                "must be at least 1 (the paper fitted g(r) from r = 1 upward); use r >= 1 or set \
+                 extrapolate_g = true"
+                    .to_string()
             };
             return Err(Error::invalid("r", r, reason));
         }

@@ -207,6 +207,18 @@ struct Spans<'a> {
 
 impl Spans<'_> {
     /// An error at `span` if known, else naming `key`.
+    /// [`error`](Self::error) for an error of the value at `span`: a file that could not be read
+    /// stays a read failure ([`Error::located_at`]).
+    fn locate(&self, span: Option<&Range<usize>>, key: &str, error: Error) -> Error {
+        match span {
+            Some(span) => {
+                let at = Located::new(self.text, Some(span.clone()));
+                error.located_at(self.source, at.line, &format!("column {}: ", at.column))
+            }
+            None => self.error(span, key, &error.to_string()),
+        }
+    }
+
     fn error(&self, span: Option<&Range<usize>>, key: &str, message: &str) -> Error {
         match span {
             Some(span) => Located::new(self.text, Some(span.clone())).error(self.source, message),
@@ -269,16 +281,18 @@ fn build(entries: Vec<Entry>, spans: &Spans, base_dir: &Path) -> Result<LacquerM
         // A rule that ties fields together points at the failing field's line if the file set it,
         // else at the preset it came from.
         let field = match &e {
-            Error::InvalidParameter { field, .. } => field.as_str(),
-            _ => "",
+            Error::InvalidParameter { field, .. } => field.clone(),
+            _ => String::new(),
         };
         let entry = entries
             .iter()
             .find(|en| en.key == field)
             .or(preset)
             .or(entries.first());
-        let (span, key) = entry.map_or((None, field), |en| (en.key_span.as_ref(), &en.key));
-        spans.error(span, key, &e.to_string())
+        let (span, key) = entry.map_or((None, field.as_str()), |en| {
+            (en.key_span.as_ref(), en.key.as_str())
+        });
+        spans.locate(span, key, e)
     })?;
     Ok(material)
 }
@@ -320,7 +334,8 @@ fn apply(
         ("extrapolate_g", Value::Bool(b)) => MaterialValue::Bool(*b),
         ("extrapolate_g", _) => return Err(wrong_type("a boolean (true or false)")),
         ("fresnel", Value::Str(path)) => {
-            return set_fresnel(material, path, base_dir).map_err(|e| at_value(&e.to_string()));
+            return set_fresnel(material, path, base_dir)
+                .map_err(|e| spans.locate(entry.value_span.as_ref(), key, e));
         }
         ("fresnel", _) => return Err(wrong_type("a string (the path of a Fresnel CSV)")),
         (_, Value::Number(x)) => MaterialValue::Number(*x),

@@ -232,12 +232,14 @@ impl BuiltinMesh {
         Self::ALL.map(Self::spec).join(", ")
     }
 
-    /// `builtin:<name>` for one of [`BuiltinMesh::ALL`].
+    /// `builtin:<name>`, or `<name>` alone, for one of [`BuiltinMesh::ALL`] (any case).
     pub fn parse(spec: &str) -> Result<Self> {
         let trimmed = spec.trim();
-        trimmed
-            .strip_prefix(BUILTIN_PREFIX)
-            .and_then(|name| Self::ALL.into_iter().find(|b| b.name() == name))
+        // `sphere` alone names the built-in too (a mesh file needs an extension), in any case.
+        let name = crate::text::builtin_name(trimmed).unwrap_or(trimmed);
+        Self::ALL
+            .into_iter()
+            .find(|b| b.name().eq_ignore_ascii_case(name))
             .ok_or_else(|| {
                 Error::invalid(
                     "mesh",
@@ -507,7 +509,14 @@ mod tests {
             BuiltinMesh::parse(" builtin:plate ").unwrap(),
             BuiltinMesh::Plate
         );
-        for bad in ["sphere", "builtin:cube", "bowl", ""] {
+        // A name alone and any case, as scene files, the CLI and the C API write them.
+        assert_eq!(BuiltinMesh::parse("sphere").unwrap(), BuiltinMesh::Sphere);
+        assert_eq!(BuiltinMesh::parse("Bowl").unwrap(), BuiltinMesh::Bowl);
+        assert_eq!(
+            BuiltinMesh::parse("BUILTIN:Plate").unwrap(),
+            BuiltinMesh::Plate
+        );
+        for bad in ["builtin:cube", "cube", "bowl.obj", "builtin:", ""] {
             match BuiltinMesh::parse(bad) {
                 Err(Error::InvalidParameter { reason, .. }) => {
                     for name in ["sphere", "board", "bowl", "plate"] {

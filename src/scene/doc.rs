@@ -58,6 +58,20 @@ impl Origin {
         }
     }
 
+    /// `error` located here, as [`error`](Self::error) does, except that a file that could not
+    /// be read stays a read failure ([`Error::located_at`]).
+    pub fn locate(&self, error: Error) -> Error {
+        match self {
+            Origin::File {
+                source,
+                line,
+                column,
+                ..
+            } => error.located_at(source, *line, &format!("column {column}: ")),
+            Origin::Override { .. } => self.error(error),
+        }
+    }
+
     /// A short human form for listings: `file:line:col` or the override's name.
     pub fn describe(&self) -> String {
         match self {
@@ -245,8 +259,13 @@ pub fn parse_override_value(text: &str, what: &str, base_dir: &Path) -> Node {
         text: Arc::from(text.trim()),
         base_dir: Arc::from(base_dir),
     };
-    let parsed = parse_document(&format!("v = {text}"), what, base_dir)
-        .ok()
+    // `0x64` on a command line is a size (`--set output.size=0x64`), not TOML's hexadecimal 100:
+    // hexadecimal, octal and binary integers are taken as the text typed.
+    let unsigned = text.trim().trim_start_matches(['+', '-']);
+    let radix_integer = ["0x", "0o", "0b"].iter().any(|p| unsigned.starts_with(p));
+    let parsed = (!radix_integer)
+        .then(|| parse_document(&format!("v = {text}"), what, base_dir).ok())
+        .flatten()
         .and_then(|doc| match doc.value {
             Value::Table(mut entries) if entries.len() == 1 => entries.pop().map(|e| e.node.value),
             _ => None,
@@ -469,5 +488,10 @@ mod tests {
         assert_eq!(p("builtin:plate"), Value::Str("builtin:plate".into()));
         assert_eq!(p("smooth-red"), Value::Str("smooth-red".into()));
         assert!(matches!(p("[0, 1, 4]"), Value::Array(v) if v.len() == 3));
+        // A size typed on the command line, not TOML's hexadecimal 100.
+        assert_eq!(p("0x64"), Value::Str("0x64".into()));
+        assert_eq!(p("0b1"), Value::Str("0b1".into()));
+        assert_eq!(p("-0o7"), Value::Str("-0o7".into()));
+        assert_eq!(p("0"), Value::Integer(0));
     }
 }

@@ -275,4 +275,47 @@ mod tests {
         ));
         assert_eq!(scene.output.background, Background::Environment);
     }
+
+    /// Names in any case; a built-in or a preset by its name alone (a probe found `material =
+    /// "smooth-red"` read as a missing file, `Paper` refused while `ACES` was taken).
+    #[test]
+    fn names_are_read_in_any_case_and_alone() {
+        let text = "environment = \"Builtin:Studio\"\n\
+                    light = [{ kind = \"Point\", position = [0, 2, 2], intensity = 3 }]\n\
+                    [[object]]\nmesh = \"Sphere\"\nmaterial = \"Rough-Red\"\n\
+                    [[object]]\nmesh = \"BUILTIN:board\"\n\
+                    material = { preset = \"SMOOTH\", r = 2 }\n\
+                    [render]\nenvironment_model = \"BRDF\"\n\
+                    [output]\ntonemap = \"Reinhard\"\nformat = \"EXR\"\n\
+                    background = \"Transparent\"\n";
+        let mut document = SceneDocument::parse(text, "s.toml", Path::new(".")).unwrap();
+        // An override of a preset named alone starts from that preset.
+        document
+            .set("object.0.material.r=2", Path::new("."))
+            .unwrap();
+        let scene = document.build().unwrap();
+        let mut rough_red = LacquerMaterial::preset("rough-red").unwrap();
+        rough_red.lacquer_ratio = 2.0;
+        assert_eq!(scene.objects[0].material, rough_red);
+        assert!(matches!(
+            scene.objects[0].mesh,
+            MeshSource::Builtin(BuiltinMesh::Sphere)
+        ));
+        assert!(matches!(
+            scene.objects[1].mesh,
+            MeshSource::Builtin(BuiltinMesh::Board)
+        ));
+        assert_eq!(
+            scene.objects[1].material.beckmann_m,
+            LacquerMaterial::preset("smooth").unwrap().beckmann_m
+        );
+        assert!(matches!(scene.lights[0], Light::Point { .. }));
+        assert!(matches!(
+            &scene.environment,
+            EnvironmentSpec::Map { source, .. } if source.name() == "builtin:studio"
+        ));
+        assert_eq!(scene.render.environment_model, EnvironmentModel::Brdf);
+        assert_eq!(scene.output.background, Background::Transparent);
+        assert_eq!(scene.output.tone_curve, ToneCurve::Reinhard);
+    }
 }

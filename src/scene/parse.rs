@@ -219,7 +219,17 @@ pub(super) fn vec3(node: &Node, key: &str) -> Result<DVec3> {
         Value::Array(items) if items.len() == 3 => {
             let mut v = [0.0; 3];
             for (slot, item) in v.iter_mut().zip(items) {
-                *slot = number(item, key).map_err(|_| wrong())?;
+                *slot = match item.value {
+                    // A number that is not finite says so (it read as "not three numbers").
+                    Value::Float(f) if !f.is_finite() => {
+                        return Err(item.at.error(format!(
+                            "`{key}` must be three finite numbers, found {} in {}",
+                            f,
+                            show(node)
+                        )))
+                    }
+                    _ => number(item, key).map_err(|_| wrong())?,
+                };
             }
             Ok(DVec3::from_array(v))
         }
@@ -262,7 +272,7 @@ pub(super) fn whole(node: &Node, key: &str, range: std::ops::RangeInclusive<u32>
 
 /// Wraps an owner's validation error with where the value was written.
 pub(super) fn located<T>(at: &Origin, result: Result<T>) -> Result<T> {
-    result.map_err(|e| at.error(e))
+    result.map_err(|e| at.locate(e))
 }
 
 /// `result`'s error located at the entry its field names (`camera.fov_deg` → the `fov_deg`
@@ -290,7 +300,7 @@ pub(super) fn located_at_field<T>(
             .iter()
             .find(|entry| entry.key == key)
             .map_or(at, |entry| &entry.node.at)
-            .error(e)
+            .locate(e)
     })
 }
 
@@ -514,19 +524,36 @@ pub fn cached_file_mesh(path: &Path) -> Result<Arc<Mesh>> {
 
 fn mesh_source(node: &Node) -> Result<MeshSource> {
     let spec = string(node, "mesh")?;
-    if spec.starts_with("builtin:") {
+    if crate::text::builtin_name(spec).is_some() {
         return located(&node.at, BuiltinMesh::parse(spec).map(MeshSource::Builtin));
+    }
+    // `sphere` alone is the built-in (a mesh file needs an extension, so it cannot mean one).
+    if let Ok(builtin) = BuiltinMesh::parse(spec) {
+        return Ok(MeshSource::Builtin(builtin));
     }
     let path = doc::resolve_path(&node.at, spec);
     located(&node.at, cached_file_mesh(&path))?;
     Ok(MeshSource::File(path))
 }
 
+/// `material = "file.toml"`, or a preset's name: `material = "smooth-red"` is the preset (a
+/// preset's name has no extension, so it cannot mean a material file; it was read as a missing
+/// one). The same for `file` in a table, which is what `--set object.0.material.r=2` makes of
+/// the string.
+fn material_named(node: &Node, text: &str) -> Result<LacquerMaterial> {
+    if Path::new(text).extension().is_none() {
+        if let Ok(preset) = LacquerMaterial::preset(text.trim()) {
+            return Ok(preset);
+        }
+    }
+    let path = doc::resolve_path(&node.at, text);
+    located(&node.at, load_material_file(&path))
+}
+
 /// `material = "file.toml"` or a table: `file` or `preset` to start from, then SPEC keys.
 fn material(node: &Node) -> Result<LacquerMaterial> {
-    if let Value::Str(path) = &node.value {
-        let path = doc::resolve_path(&node.at, path);
-        return located(&node.at, load_material_file(&path));
+    if let Value::Str(text) = &node.value {
+        return material_named(node, text);
     }
     let mut valid = vec!["file", "preset"];
     valid.extend_from_slice(MATERIAL_KEYS);
@@ -538,10 +565,7 @@ fn material(node: &Node) -> Result<LacquerMaterial> {
                 .at
                 .error("a material starts from `file` or from `preset`, not both"))
         }
-        (Some(file), None) => {
-            let path = doc::resolve_path(&file.at, string(file, "file")?);
-            located(&file.at, load_material_file(&path))?
-        }
+        (Some(file), None) => material_named(file, string(file, "file")?)?,
         (None, Some(preset)) => located(
             &preset.at,
             LacquerMaterial::preset(string(preset, "preset")?),

@@ -15,6 +15,7 @@ use crate::output::ToneCurve;
 use crate::raster::draw::{Background, SUPPORTED_SAMPLES};
 use crate::raster::draw::{MAX_BOUNCES, MAX_RAYS};
 use crate::raster::lights::Light;
+use crate::text::builtin_name;
 use crate::Result;
 
 /// The keys of a directional light besides `kind`.
@@ -32,7 +33,8 @@ pub(super) fn light(node: &Node) -> Result<Light> {
         _ => number(n, key).map(DVec3::splat),
     };
     let kind = get("kind").map(|n| string(n, "kind")).transpose()?;
-    let kind = kind.unwrap_or("dir");
+    let kind = kind.unwrap_or("dir").to_ascii_lowercase();
+    let kind = kind.as_str();
     // A key of the other kind was ignored, so a light written as one kind with the other's keys
     // drew with values the author never wrote (or failed on a missing key without saying why).
     let (takes, other_kind, other_keys) = match kind {
@@ -122,22 +124,26 @@ pub(super) fn environment(node: &Node) -> Result<EnvironmentSpec> {
     if spec.eq_ignore_ascii_case("none") {
         return Ok(EnvironmentSpec::None);
     }
-    let resolved = if spec.starts_with("builtin:") {
-        if spec != BUILTIN_STUDIO {
+    let resolved = if builtin_name(spec).is_some() {
+        if !spec.eq_ignore_ascii_case(BUILTIN_STUDIO) {
             return Err(source.at.error(format!(
                 "unknown built-in environment {spec:?}; valid: {}",
                 BUILTIN_STUDIO
             )));
         }
-        spec.to_string()
+        BUILTIN_STUDIO.to_string()
     } else {
         let path = doc::resolve_path(&source.at, spec);
         if !path.is_file() {
-            return Err(source.at.error(format!(
-                "environment map {} does not exist (relative paths resolve against the file \
-                 that names them)",
-                path.display()
-            )));
+            // An I/O failure at this line (the C API's IO_ERROR), as a missing mesh is.
+            let missing = std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "it does not exist (relative paths resolve against the file that names them)",
+            );
+            return Err(source.at.locate(crate::Error::Read {
+                path: path.clone(),
+                source: missing,
+            }));
         }
         path.display().to_string()
     };
@@ -227,8 +233,10 @@ pub(super) fn output(node: &Node) -> Result<OutputSpec> {
             }
             _ => {
                 out.background = match &n.value {
-                    Value::Str(s) if s == "env" => Background::Environment,
-                    Value::Str(s) if s == "transparent" => Background::Transparent,
+                    Value::Str(s) if s.eq_ignore_ascii_case("env") => Background::Environment,
+                    Value::Str(s) if s.eq_ignore_ascii_case("transparent") => {
+                        Background::Transparent
+                    }
                     Value::Array(_) => {
                         let c = vec3(n, "background")?;
                         if c.min_element() < 0.0 {

@@ -106,3 +106,48 @@ fn gpu_brdf_matches_cpu_model_for_every_preset() {
     }
     assert_no_validation_messages(&gpu);
 }
+
+/// N·V and N·L just above 0 and far below f32's useful range: nh⁴ and 4·nv·nl underflow there,
+/// and the GPU returned NaN (0/0) for nv = nl = 6.1e-17 (an independent audit, 2026-12-06).
+/// The f_r there is the diffuse term (f_spec is below e^-1e19), which the CPU model gives.
+#[test]
+fn gpu_brdf_is_finite_where_the_cosines_underflow() {
+    let gpu = validated_gpu();
+    let evaluator = BrdfEvaluator::new(&gpu).unwrap();
+    let triples: Vec<[DVec3; 3]> = [6.123234e-17, 1e-20, 1e-30, 1e-37, 1e-44]
+        .iter()
+        .flat_map(|&t: &f64| {
+            let n = DVec3::Y;
+            // (Not the mirror pair V = (1, t, 0), L = (-1, t, 0): its f_spec, F·D/(4·nv·nl) with
+            // h = N, is ~1e38 at t = 1e-20 and past f32's range below, inf on both sides.)
+            [
+                [n, DVec3::new(1.0, t, 0.0), DVec3::new(t, t, 1.0)],
+                [n, DVec3::new(1.0, t, 0.0), DVec3::new(0.0, t, 1.0)],
+                [n, DVec3::new(0.0, t, 1.0), DVec3::new(0.0, 1.0, 0.0)],
+            ]
+        })
+        .collect();
+    for preset in PRESET_NAMES {
+        let material = LacquerMaterial::preset(preset).unwrap();
+        let params = material.brdf_params().unwrap();
+        let fresnel = material.fresnel_table().unwrap();
+        let gpu_values = evaluator
+            .evaluate(&gpu, &params, &fresnel, &triples)
+            .unwrap();
+        for (i, (triple, got)) in triples.iter().zip(&gpu_values).enumerate() {
+            let [n, v, l] = triple.map(|d| d.normalize().as_vec3().as_dvec3());
+            let want = lacquer_brdf(&params, &fresnel, n, v, l);
+            for c in 0..3 {
+                let got = f64::from(got[c]);
+                // The same bound as the preset test above: 1e-4 relative, or 1e-6 absolute
+                // below f_r = 1e-6.
+                assert!(
+                    got.is_finite() && (got - want[c]).abs() <= 1e-6 + 1e-4 * want[c].abs(),
+                    "{preset}: row {i} {triple:?} channel {c}: gpu {got}, cpu {}",
+                    want[c]
+                );
+            }
+        }
+    }
+    assert_no_validation_messages(&gpu);
+}

@@ -81,7 +81,7 @@ const CASES: &[(&str, usize, usize, &[&str])] = &[
         "[environment]\nsource = \"no-such.hdr\"\n",
         2,
         10,
-        &["no-such.hdr", "does not exist"],
+        &["cannot read", "no-such.hdr", "does not exist"],
     ),
     // bad mesh: an unknown built-in, and a file that is not a mesh
     (
@@ -120,12 +120,26 @@ fn every_error_kind_names_file_line_and_column() {
     for (text, line, column, words) in CASES {
         let err = parse_scene_str(text, "scene.toml", dir.path()).unwrap_err();
         let message = err.to_string();
+        // A file that cannot be read is an I/O failure at its line; everything else a parse
+        // error there. Both are located alike.
+        let missing_file = text.contains("no-such");
         match &err {
             Error::Parse {
                 file,
                 line: l,
                 message: m,
+            }
+            | Error::ReadNamedAt {
+                file,
+                line: l,
+                message: m,
+                ..
             } => {
+                assert_eq!(
+                    matches!(err, Error::ReadNamedAt { .. }),
+                    missing_file,
+                    "{text:?}: {err:?}"
+                );
                 assert_eq!(file, "scene.toml", "{text:?}");
                 assert_eq!(
                     (*l, m.split(':').next()),

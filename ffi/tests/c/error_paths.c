@@ -501,6 +501,15 @@ int main(void) {
     EXPECT(shikki_scene_create_toml("[camera\neye = 1", NULL, &bad_scene), SHIKKI_STATUS_PARSE_ERROR);
     EXPECT(shikki_mesh_create_builtin("teapot", &mesh), SHIKKI_STATUS_INVALID_ARGUMENT);
     EXPECT(shikki_environment_load("/nonexistent/sky.hdr", &environment), SHIKKI_STATUS_IO_ERROR);
+    /* A file the scene names but that cannot be read is an I/O failure at its line, not a parse
+       error (it was PARSE_ERROR before 2026-12-06's probe of the left-alone cases). */
+    EXPECT_MESSAGE(shikki_scene_create_toml("[[object]]\nmesh = \"/nonexistent/cup.obj\"\n", NULL,
+                                            &bad_scene),
+                   SHIKKI_STATUS_IO_ERROR, ":2: column 8: cannot read /nonexistent/cup.obj");
+    EXPECT_MESSAGE(shikki_scene_create_toml("[[object]]\nmesh = \"builtin:sphere\"\n"
+                                            "material = \"/nonexistent/red.toml\"\n",
+                                            NULL, &bad_scene),
+                   SHIKKI_STATUS_IO_ERROR, "cannot read /nonexistent/red.toml");
 
     /* A material built with every setter. */
     EXPECT(shikki_material_create_preset("rough-red", &material), SHIKKI_STATUS_OK);
