@@ -147,6 +147,9 @@ pub enum Warning {
     /// A scene asked for light between objects (SPEC §6) on a device without ray queries: it
     /// was drawn without (once per renderer). `message` says what is missing and what to install.
     NoRayQueries { message: String },
+    /// A mesh file loaded with changes: primitives skipped, degenerate triangles dropped,
+    /// normals generated (`mesh_io::LoadReport`). Once per file per renderer.
+    MeshLoadNotes { mesh: PathBuf, notes: Vec<String> },
 }
 
 impl std::fmt::Display for Warning {
@@ -181,6 +184,9 @@ impl std::fmt::Display for Warning {
                 write!(f, "the prefiltered environment was not cached: {reason}")
             }
             Warning::NoRayQueries { message } => f.write_str(message),
+            Warning::MeshLoadNotes { mesh, notes } => {
+                write!(f, "{}: {}", mesh.display(), notes.join("; "))
+            }
         }
     }
 }

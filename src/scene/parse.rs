@@ -23,7 +23,7 @@ use crate::model::LacquerMaterial;
 use crate::output::OutputFormat;
 use crate::raster::lights::{default_lights, MAX_LIGHTS};
 use crate::raster::mesh::{BuiltinMesh, Mesh};
-use crate::raster::mesh_io::load_mesh;
+use crate::raster::mesh_io::load_mesh_with_report;
 use crate::raster::Camera;
 use crate::text::read_text_file;
 use crate::{Error, Result};
@@ -495,10 +495,23 @@ fn matrix(node: &Node) -> Result<DMat4> {
 /// Meshes read from files, kept for the life of the process keyed by path, size and modification
 /// time: a batch names the same file in every job, and the scene must load it at parse time so a
 /// bad mesh is reported at the line that names it.
-type MeshCache = Mutex<Vec<(PathBuf, u64, Option<std::time::SystemTime>, Arc<Mesh>)>>;
+type MeshCache = Mutex<Vec<(PathBuf, u64, Option<std::time::SystemTime>, FileMesh)>>;
+
+/// A mesh file as loaded, with what the loader changed (`LoadReport::notes`; empty when it loaded
+/// as written).
+#[derive(Clone)]
+pub struct FileMesh {
+    pub mesh: Arc<Mesh>,
+    pub notes: Arc<[String]>,
+}
 
 /// Loads (or finds in the process cache) the mesh file at `path`.
 pub fn cached_file_mesh(path: &Path) -> Result<Arc<Mesh>> {
+    cached_file_mesh_noted(path).map(|file| file.mesh)
+}
+
+/// [`cached_file_mesh`] with the loader's notes.
+pub fn cached_file_mesh_noted(path: &Path) -> Result<FileMesh> {
     static CACHE: OnceLock<MeshCache> = OnceLock::new();
     let metadata = std::fs::metadata(path).map_err(|source| Error::Read {
         path: path.to_path_buf(),
@@ -514,12 +527,16 @@ pub fn cached_file_mesh(path: &Path) -> Result<Arc<Mesh>> {
             return Ok(hit.3.clone());
         }
     }
-    let mesh = Arc::new(load_mesh(path)?);
+    let (mesh, report) = load_mesh_with_report(path)?;
+    let file = FileMesh {
+        mesh: Arc::new(mesh),
+        notes: report.notes().into(),
+    };
     if let Ok(mut entries) = cache.lock() {
         entries.retain(|(p, ..)| p != path);
-        entries.push((path.to_path_buf(), stamp.0, stamp.1, mesh.clone()));
+        entries.push((path.to_path_buf(), stamp.0, stamp.1, file.clone()));
     }
-    Ok(mesh)
+    Ok(file)
 }
 
 fn mesh_source(node: &Node) -> Result<MeshSource> {

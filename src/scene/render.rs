@@ -11,9 +11,10 @@
 //! the environment `environment::prepare`. Prints nothing: warnings wait in
 //! [`SceneRenderer::take_warnings`].
 
+use std::path::PathBuf;
 use std::sync::Arc;
 
-use super::{EnvironmentSpec, MeshSource, Scene};
+use super::{parse, EnvironmentSpec, MeshSource, Scene};
 use crate::environment::disk_cache::EnvironmentDiskCache;
 use crate::environment::gpu::GpuEnvironment;
 use crate::environment::params::ViewBlur;
@@ -66,6 +67,8 @@ pub struct SceneRenderer {
     /// Uploaded meshes, oldest first.
     gpu_meshes: Vec<(Arc<Mesh>, GpuMesh)>,
     warnings: Vec<Warning>,
+    /// The mesh files whose load notes were given ([`Warning::MeshLoadNotes`], once a file).
+    noted_meshes: Vec<PathBuf>,
     /// [`Warning::NoRayQueries`] was given.
     said_no_ray_queries: bool,
     /// [`set_pipelines_on_a_thread`](Self::set_pipelines_on_a_thread).
@@ -96,6 +99,7 @@ impl SceneRenderer {
             placed: Vec::new(),
             gpu_meshes: Vec::new(),
             warnings: Vec::new(),
+            noted_meshes: Vec::new(),
             said_no_ray_queries: false,
             pipelines_on_a_thread: false,
             built_ahead: false,
@@ -154,6 +158,7 @@ impl SceneRenderer {
         let mut meshes = Vec::with_capacity(scene.objects.len());
         let mut shading: Vec<(BrdfParams, FresnelTable, ViewBlur)> = Vec::new();
         for (index, object) in scene.objects.iter().enumerate() {
+            self.note_mesh_file(&object.mesh)?;
             placement_checked(index, object.transform)?;
             meshes.push(self.placed_mesh(&object.mesh, object.transform)?);
             shading.push((
@@ -288,6 +293,26 @@ impl SceneRenderer {
             };
             self.gpu_meshes.remove(unused);
         }
+        Ok(())
+    }
+
+    /// Says what the loader changed in a mesh file (once per file and renderer: a batch names the
+    /// same file in every job).
+    fn note_mesh_file(&mut self, source: &MeshSource) -> Result<()> {
+        let MeshSource::File(path) = source else {
+            return Ok(());
+        };
+        if self.noted_meshes.contains(path) {
+            return Ok(());
+        }
+        let notes = parse::cached_file_mesh_noted(path)?.notes;
+        if !notes.is_empty() {
+            self.warnings.push(Warning::MeshLoadNotes {
+                mesh: path.clone(),
+                notes: notes.to_vec(),
+            });
+        }
+        self.noted_meshes.push(path.clone());
         Ok(())
     }
 

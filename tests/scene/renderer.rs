@@ -164,6 +164,38 @@ fn a_map_that_is_not_two_to_one_is_named_in_a_warning() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// What the loader changed in a mesh file (a skipped line element, a degenerate triangle,
+/// generated normals) is returned as one warning naming the file, once per renderer: it was
+/// said nowhere when rendering (a probe, 2026-12-06).
+#[test]
+fn a_mesh_files_load_notes_are_a_warning_once() {
+    let dir = scratch("renderer-mesh-notes");
+    std::fs::write(
+        dir.join("tri.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 1 2\nl 1 2\n",
+    )
+    .unwrap();
+    let text = "environment = \"none\"\n[[object]]\nmesh = \"tri.obj\"\n\
+                [output]\nsize = \"8x8\"\nsamples = 1\n";
+    let scene = parse_scene_str(text, "s.toml", &dir).unwrap();
+    let gpu = validated_gpu();
+    let mut renderer = SceneRenderer::with_disk_cache(None);
+    renderer.render(&gpu, &scene).unwrap();
+    renderer.render(&gpu, &scene).unwrap();
+    let notes: Vec<Warning> = renderer
+        .take_warnings()
+        .into_iter()
+        .filter(|w| matches!(w, Warning::MeshLoadNotes { .. }))
+        .collect();
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    let said = notes[0].to_string();
+    for words in ["tri.obj", "point/line", "degenerate", "normals"] {
+        assert!(said.contains(words), "{said}");
+    }
+    assert_no_validation_messages(&gpu);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Every numeric key, set from a scene file's number, holds exactly that number — including
 /// values whose shortest decimal form has 17 digits.
 #[test]
