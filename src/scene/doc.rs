@@ -308,9 +308,12 @@ fn relocate(node: Node) -> Node {
 }
 
 /// The key a string stands for when a path goes through it: `material = "red.toml"` overridden
-/// at `material.r` becomes `{ file = "red.toml", r = … }`; likewise `environment = "none"`.
-fn string_as_table_key(parent_key: &str) -> Option<&'static str> {
+/// at `material.r` becomes `{ file = "red.toml", r = … }`, `material = "smooth-red"` (a preset's
+/// name, which `parse::material` reads as the preset) `{ preset = "smooth-red", r = … }`;
+/// likewise `environment = "none"`.
+fn string_as_table_key(parent_key: &str, text: &str) -> Option<&'static str> {
     match parent_key {
+        "material" if crate::model::LacquerMaterial::preset(text.trim()).is_ok() => Some("preset"),
         "material" => Some("file"),
         "environment" => Some("source"),
         _ => None,
@@ -332,7 +335,11 @@ pub fn set_path(root: &mut Node, path: &str, value: Node) -> Result<()> {
     let mut parent_key = "";
     for (i, segment) in segments.iter().enumerate() {
         let last = i + 1 == segments.len();
-        if let (Value::Str(s), Some(key)) = (&current.value, string_as_table_key(parent_key)) {
+        let as_key = match &current.value {
+            Value::Str(s) => string_as_table_key(parent_key, s),
+            _ => None,
+        };
+        if let (Value::Str(s), Some(key)) = (&current.value, as_key) {
             let inner = Node {
                 value: Value::Str(s.clone()),
                 at: current.at.clone(),

@@ -317,5 +317,25 @@ mod tests {
         assert_eq!(scene.render.environment_model, EnvironmentModel::Brdf);
         assert_eq!(scene.output.background, Background::Transparent);
         assert_eq!(scene.output.tone_curve, ToneCurve::Reinhard);
+
+        // A sweep of the preset replaces a preset named alone (it was "not both", a probe).
+        let mut document = SceneDocument::parse(text, "s.toml", Path::new(".")).unwrap();
+        document
+            .set("object.0.material.preset=smooth-black", Path::new("."))
+            .unwrap();
+        let scene = document.build().unwrap();
+        let smooth_black = LacquerMaterial::preset("smooth-black").unwrap();
+        assert_eq!(scene.objects[0].material, smooth_black);
+        // Over a material file it is a conflict, named at the override that made it.
+        let text = "[[object]]\nmesh = \"sphere\"\nmaterial = \"red.toml\"\n";
+        let mut document = SceneDocument::parse(text, "s.toml", Path::new(".")).unwrap();
+        document
+            .set("object.0.material.preset=smooth-black", Path::new("."))
+            .unwrap();
+        let message = document.build().unwrap_err().to_string();
+        assert!(
+            message.contains("--set object.0.material.preset") && message.contains("not both"),
+            "{message}"
+        );
     }
 }

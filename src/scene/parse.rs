@@ -577,10 +577,17 @@ fn material(node: &Node) -> Result<LacquerMaterial> {
     let entries = table(node, "the material", &valid)?;
     let get = |key: &str| entries.iter().find(|e| e.key == key).map(|e| &e.node);
     let mut material = match (get("file"), get("preset")) {
-        (Some(file), Some(_)) => {
-            return Err(file
-                .at
-                .error("a material starts from `file` or from `preset`, not both"))
+        (Some(file), Some(preset)) => {
+            // At the override that added the second start (a sweep of `preset` over a scene's
+            // `material = "red.toml"`), else at the file.
+            let at = match (&preset.at, &file.at) {
+                (at @ Origin::Override { .. }, _) | (_, at) => at,
+            };
+            return Err(at.error(format!(
+                "a material starts from `file` or from `preset`, not both (file {}, preset {})",
+                show(file),
+                show(preset)
+            )));
         }
         (Some(file), None) => material_named(file, string(file, "file")?)?,
         (None, Some(preset)) => located(
