@@ -21,15 +21,45 @@ pub fn run_fit(args: FitArgs) -> Result<()> {
             "the material file must end in .toml, e.g. -o lacquer.toml",
         ));
     }
-    let reference = args
+    let named = args
         .normalise_like
         .as_deref()
         .map(material_named)
         .transpose()?;
+    let fresnel_path = fresnel_path_beside(&args.output);
+    let mut inputs = vec![args.data.clone()];
+    if let Some((reference, file)) = &named {
+        inputs.extend(file.iter().chain(&reference.fresnel_file).cloned());
+    }
+    let mut outputs = vec![
+        Output::new("-o", &args.output, &args.output, "the material file"),
+        Output::new(
+            "-o",
+            &args.output,
+            &fresnel_path,
+            "the material's Fresnel table (written beside it)",
+        ),
+    ];
+    if let Some(dir) = &args.report {
+        check_report_folder(dir)?;
+        outputs.extend(
+            report::report_files()
+                .into_iter()
+                .map(|name| Output::new("--report", dir, &dir.join(name), "the report file")),
+        );
+    }
+    refuse_overwriting_inputs(&outputs, &inputs)?;
+
+    let reference = named.map(|(material, _)| material);
     let data = read_measurements(&args.data)?;
+    eprintln!(
+        "read {} rows on {} board(s) from {}; fitting",
+        data.rows.len(),
+        data.samples.len(),
+        args.data.display()
+    );
     let fit = fit_measurements(&data, &FitOptions { reference })?;
 
-    let fresnel_path = fresnel_path_beside(&args.output);
     let fresnel_name = fresnel_path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -79,7 +109,16 @@ pub fn run_fit(args: FitArgs) -> Result<()> {
 
 pub fn run_synth(args: SynthArgs) -> Result<()> {
     let (material, origin) = match (&args.material, &args.preset) {
-        (Some(path), _) => (load_material_file(path)?, path.display().to_string()),
+        (Some(path), _) => {
+            let material = load_material_file(path)?;
+            let inputs: Vec<PathBuf> = std::iter::once(path)
+                .chain(&material.fresnel_file)
+                .cloned()
+                .collect();
+            let output = Output::new("-o", &args.output, &args.output, "the synthetic data");
+            refuse_overwriting_inputs(&[output], &inputs)?;
+            (material, path.display().to_string())
+        }
         (None, Some(name)) => (LacquerMaterial::preset(name)?, format!("preset {name}")),
         (None, None) => {
             return Err(Error::invalid(
@@ -129,12 +168,14 @@ pub fn run_synth(args: SynthArgs) -> Result<()> {
     Ok(())
 }
 
-/// A preset name, or else the path of a material TOML.
-fn material_named(name: &str) -> Result<LacquerMaterial> {
-    if PRESET_NAMES.contains(&name) {
-        LacquerMaterial::preset(name)
+/// A preset name (in any case), or else the path of a material TOML, which is returned too (it is
+/// an input the outputs must not overwrite).
+fn material_named(name: &str) -> Result<(LacquerMaterial, Option<PathBuf>)> {
+    if PRESET_NAMES.iter().any(|p| p.eq_ignore_ascii_case(name)) {
+        Ok((LacquerMaterial::preset(name)?, None))
     } else if Path::new(name).is_file() {
-        load_material_file(Path::new(name))
+        let path = PathBuf::from(name);
+        Ok((load_material_file(&path)?, Some(path)))
     } else {
         Err(Error::invalid(
             "--normalise-like",
@@ -144,6 +185,86 @@ fn material_named(name: &str) -> Result<LacquerMaterial> {
                 PRESET_NAMES.join(", ")
             ),
         ))
+    }
+}
+
+/// A file a command will write: the flag that decides where (and what it was given, for the
+/// message), its path and what it is.
+struct Output<'a> {
+    flag: &'static str,
+    given: &'a Path,
+    path: PathBuf,
+    what: &'a str,
+}
+
+impl<'a> Output<'a> {
+    fn new(flag: &'static str, given: &'a Path, path: &Path, what: &'a str) -> Self {
+        Output {
+            flag,
+            given,
+            path: path.to_path_buf(),
+            what,
+        }
+    }
+}
+
+/// Refuses, before anything is written, an output that is one of the inputs: written atomically,
+/// it would replace the input (`fit boards.csv --report .` replaced the measurements with the
+/// per-board table, `fit a.fresnel.csv -o a.toml` with the fitted Fresnel table).
+fn refuse_overwriting_inputs(outputs: &[Output], inputs: &[PathBuf]) -> Result<()> {
+    for output in outputs {
+        if let Some(input) = inputs.iter().find(|i| same_file(&output.path, i)) {
+            let fix = match output.flag {
+                "--report" => "choose another --report folder, e.g. --report report/",
+                _ => "choose another -o name, e.g. -o fitted.toml",
+            };
+            return Err(Error::invalid(
+                output.flag,
+                output.given.display(),
+                format!(
+                    "{} {} is the input {} (the same file); writing it would replace the input, \
+                     so nothing was written: {fix}",
+                    output.what,
+                    output.path.display(),
+                    input.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Whether two paths name one existing file: the same device and inode on Unix, so hard links,
+/// symbolic links and `./x` against `x` all count; the canonical paths elsewhere.
+fn same_file(a: &Path, b: &Path) -> bool {
+    let (Ok(meta_a), Ok(meta_b)) = (std::fs::metadata(a), std::fs::metadata(b)) else {
+        return false;
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        meta_a.dev() == meta_b.dev() && meta_a.ino() == meta_b.ino()
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (meta_a, meta_b);
+        matches!(
+            (std::fs::canonicalize(a), std::fs::canonicalize(b)),
+            (Ok(x), Ok(y)) if x == y
+        )
+    }
+}
+
+/// The report folder may be missing (it is created) but not a file: found only after the
+/// material was written, it left a half-done run.
+fn check_report_folder(dir: &Path) -> Result<()> {
+    match std::fs::metadata(dir) {
+        Ok(meta) if !meta.is_dir() => Err(Error::invalid(
+            "--report",
+            dir.display(),
+            "is a file, not a folder; name a folder for the report (it is created if missing)",
+        )),
+        _ => Ok(()),
     }
 }
 

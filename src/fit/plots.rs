@@ -20,19 +20,27 @@ use super::polar::{
 use crate::model::brdf::{lacquer_brdf, view_dependent_diffuse, BrdfParams};
 use crate::Result;
 
+/// Every figure: its file name, its size in pixels and what it draws.
+const FIGURES: [(&str, (u32, u32), Figure); 7] = [
+    ("fig1_polar_total.png", (1200, 760), Figure::Total),
+    ("fig2_polar_diffuse.png", (800, 560), Figure::Diffuse),
+    ("fig3_polar_specular.png", (1200, 760), Figure::Specular),
+    ("fig4_beckmann.png", (1200, 500), Figure::Beckmann),
+    ("fig5_fresnel.png", (1200, 500), Figure::Fresnel),
+    ("fig6_f_nv.png", (800, 560), Figure::ViewLaw),
+    ("fig8_g_r.png", (800, 560), Figure::LacquerLaw),
+];
+
+/// The figures' file names, in the order [`render_all`] returns them.
+pub fn figure_names() -> impl Iterator<Item = &'static str> {
+    FIGURES.iter().map(|(name, _, _)| *name)
+}
+
 /// Every figure as (file name, PNG bytes).
 pub fn render_all(data: &Measurements, fit: &FitResult) -> Result<Vec<(String, Vec<u8>)>> {
     let context = Context::new(data, fit)?;
     let mut figures = Vec::new();
-    for (name, size, draw) in [
-        ("fig1_polar_total.png", (1200, 760), Figure::Total),
-        ("fig2_polar_diffuse.png", (800, 560), Figure::Diffuse),
-        ("fig3_polar_specular.png", (1200, 760), Figure::Specular),
-        ("fig4_beckmann.png", (1200, 500), Figure::Beckmann),
-        ("fig5_fresnel.png", (1200, 500), Figure::Fresnel),
-        ("fig6_f_nv.png", (800, 560), Figure::ViewLaw),
-        ("fig8_g_r.png", (800, 560), Figure::LacquerLaw),
-    ] {
+    for (name, size, draw) in FIGURES {
         let png = render_png(name, size, |area| context.draw(draw, area))?;
         figures.push((name.to_string(), png));
     }

@@ -101,6 +101,22 @@ pub fn fresnel_std_errors(fit: &FitResult) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// The tables the report writes, before its figures and `report.md`.
+const TABLE_FILES: [&str; 4] = ["residuals.csv", "boards.csv", "fresnel.csv", "m_search.csv"];
+
+/// The markdown page, written last.
+const PAGE_FILE: &str = "report.md";
+
+/// Every file name [`write_report`] writes into its folder (the CLI checks them against the
+/// inputs before anything is written).
+pub fn report_files() -> Vec<&'static str> {
+    TABLE_FILES
+        .into_iter()
+        .chain(plots::figure_names())
+        .chain([PAGE_FILE])
+        .collect()
+}
+
 /// Writes the report into `dir` (created if missing); returns the files written.
 pub fn write_report(dir: &Path, data: &Measurements, fit: &FitResult) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).map_err(|e| crate::Error::Write {
@@ -115,21 +131,26 @@ pub fn write_report(dir: &Path, data: &Measurements, fit: &FitResult) -> Result<
         written.push(path);
         Ok(())
     };
-    write("residuals.csv", residuals_csv(&residuals).as_bytes())?;
-    write("boards.csv", boards_csv(data, fit).as_bytes())?;
-    write("fresnel.csv", fresnel_csv(fit).as_bytes())?;
     let mut search = String::from("m,objective\n");
     for (m, j) in &fit.beckmann_grid {
         let _ = writeln!(search, "{m},{j}");
     }
-    write("m_search.csv", search.as_bytes())?;
+    let tables = [
+        residuals_csv(&residuals),
+        boards_csv(data, fit),
+        fresnel_csv(fit),
+        search,
+    ];
+    for (name, table) in TABLE_FILES.iter().zip(&tables) {
+        write(name, table.as_bytes())?;
+    }
     let pictures = plots::render_all(data, fit)?;
     for (name, png) in &pictures {
         write(name, png)?;
     }
     let names: Vec<&str> = pictures.iter().map(|(n, _)| n.as_str()).collect();
     write(
-        "report.md",
+        PAGE_FILE,
         markdown(data, fit, &residuals, &names).as_bytes(),
     )?;
     Ok(written)

@@ -223,3 +223,102 @@ fn bad_input_fails_with_a_clear_message_and_no_output() {
         "the relative noise σ must be in [0, 0.5)",
     );
 }
+
+/// `fit boards.csv -o lacquer.toml --report .` replaced the measurements with the report's
+/// per-board table, and `fit a.fresnel.csv -o a.toml` replaced them with the fitted Fresnel
+/// table: every output that is an input (by any name: `./x`, a hard link) is refused before
+/// anything is written or removed.
+#[test]
+fn outputs_never_overwrite_an_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    assert_ok(&shikki(
+        d,
+        &[
+            "synth",
+            "--preset",
+            "smooth",
+            "-o",
+            "boards.csv",
+            "--ratios",
+            "1",
+        ],
+    ));
+    let original = std::fs::read(d.join("boards.csv")).unwrap();
+    std::fs::copy(d.join("boards.csv"), d.join("a.fresnel.csv")).unwrap();
+    std::fs::create_dir(d.join("out")).unwrap();
+    std::fs::hard_link(d.join("boards.csv"), d.join("out/linked.fresnel.csv")).unwrap();
+    std::fs::write(d.join("ref.toml"), "preset = \"smooth\"\n").unwrap();
+    let cases: [(&[&str], &str, &str); 5] = [
+        (
+            &["fit", "boards.csv", "-o", "lacquer.toml", "--report", "."],
+            "lacquer.toml",
+            "invalid --report = .: the report file ./boards.csv is the input boards.csv (the same \
+             file)",
+        ),
+        (
+            &["fit", "./boards.csv", "-o", "lacquer.toml", "--report", "."],
+            "lacquer.toml",
+            "choose another --report folder",
+        ),
+        (
+            &["fit", "a.fresnel.csv", "-o", "a.toml"],
+            "a.toml",
+            "invalid -o = a.toml: the material's Fresnel table (written beside it) \
+             a.fresnel.csv is the input a.fresnel.csv (the same file); writing it would replace \
+             the input, so nothing was written: choose another -o name",
+        ),
+        (
+            &["fit", "boards.csv", "-o", "out/linked.toml"],
+            "out/linked.toml",
+            "choose another -o name",
+        ),
+        (
+            &[
+                "fit",
+                "boards.csv",
+                "-o",
+                "ref.toml",
+                "--normalise-like",
+                "ref.toml",
+            ],
+            "ref.fresnel.csv",
+            "is the input ref.toml",
+        ),
+    ];
+    for (args, output, expected) in cases {
+        assert_fails(d, args, output, expected);
+        assert!(
+            !d.join("residuals.csv").exists(),
+            "{args:?} wrote the report"
+        );
+    }
+    assert_eq!(std::fs::read(d.join("boards.csv")).unwrap(), original);
+    assert_eq!(std::fs::read(d.join("a.fresnel.csv")).unwrap(), original);
+    assert_eq!(
+        std::fs::read_to_string(d.join("ref.toml")).unwrap(),
+        "preset = \"smooth\"\n"
+    );
+
+    // synth must not write over the material it reads or the Fresnel table that names.
+    std::fs::write(
+        d.join("lab.fresnel.csv"),
+        "angle_deg,r,g,b\n0,0.04,0.04,0.04\n90,1,1,1\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("lab.toml"),
+        "preset = \"smooth\"\nfresnel = \"lab.fresnel.csv\"\n",
+    )
+    .unwrap();
+    let out = shikki(d, &["synth", "lab.toml", "-o", "lab.fresnel.csv"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("is the input lab.fresnel.csv"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(std::fs::read_to_string(d.join("lab.fresnel.csv"))
+        .unwrap()
+        .starts_with("angle_deg,r,g,b\n0,0.04"));
+}
