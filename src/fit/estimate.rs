@@ -81,7 +81,9 @@ pub struct FitResult {
 }
 
 /// A Fresnel knot counts as measured when rows reach it and they alone fix it to ±1 per unit
-/// relative noise (±0.01 at 1 % noise); elsewhere the table is interpolated.
+/// relative noise (±0.01 at 1 % noise); elsewhere the table is interpolated. The flag says the
+/// data determine the knot; how closely is its standard error (the report lists both): at 2 %
+/// noise on the synth grid ≤ 0.0022 up to 80°, 0.0097 at 83°.
 pub const MEASURED_UNIT_ERROR: f64 = 1.0;
 
 impl FitResult {
