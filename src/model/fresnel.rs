@@ -12,6 +12,7 @@ use super::cie::GRID_LEN;
 use super::spectral::{
     grid_reflectance_to_rgb, grid_wavelength_nm, lerp, locate, reflectance_to_rgb,
 };
+use crate::text::{detect_separator, numbered_lines, parse_number, separator_name, split_cells};
 use crate::{Error, Result};
 
 /// The header of an RGB table, exactly as SPEC §3 writes it.
@@ -60,40 +61,49 @@ impl FresnelTable {
     }
 
     /// Parses a CSV table: header `angle_deg,r,g,b` (RGB) or `angle_deg,<nm>,<nm>,…` (spectral,
-    /// converted through the spectral path). A UTF-8 BOM, CRLF line ends, whitespace around cells
-    /// and blank lines at the end are accepted; anything else that is off is an
-    /// [`Error::Parse`] naming `source` and the 1-based line.
+    /// converted through the spectral path). Header names are read in any case and wavelengths
+    /// may carry their unit (`380`, `380.0`, `380nm`, `380 nm`). A UTF-8 BOM, any line end (LF,
+    /// CRLF, CR), the separators, quotes and decimal commas of [`crate::text`], a trailing
+    /// separator, `#` comment lines, whitespace around cells and blank lines before the header or
+    /// at the end are accepted; anything else that is off is an [`Error::Parse`] naming `source`
+    /// and the 1-based line.
     pub fn from_csv_str(text: &str, source: &str) -> Result<Self> {
-        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        let lines: Vec<&str> = text.lines().map(str::trim).collect();
-        let Some(last) = lines.iter().rposition(|l| !l.is_empty()) else {
+        let mut lines = numbered_lines(text)
+            .map(|(number, line)| (number, line.trim()))
+            .filter(|(_, line)| !line.starts_with('#'));
+        let Some((header_line, header_text)) = lines.by_ref().find(|(_, l)| !l.is_empty()) else {
             return Err(Error::parse(
                 source,
                 1,
                 format!("empty file; {EXPECTED_HEADER}"),
             ));
         };
-        let header = parse_header(lines[0], source)?;
+        let header = parse_header(header_text).map_err(|m| Error::parse(source, header_line, m))?;
+        let mut rows: Vec<(usize, &str)> = lines.collect();
+        let Some(last) = rows.iter().rposition(|(_, l)| !l.is_empty()) else {
+            return Err(Error::parse(source, header_line, NO_ROWS));
+        };
+        rows.truncate(last + 1);
         let mut angles_deg: Vec<f64> = Vec::new();
         let mut values: Vec<Vec<f64>> = Vec::new();
-        for (index, line) in lines.iter().enumerate().take(last + 1).skip(1) {
-            let fail = |message: String| Error::parse(source, index + 1, message);
+        for &(number, line) in &rows {
+            let fail = |message: String| Error::parse(source, number, message);
             let mut row = parse_row(line, &header).map_err(fail)?;
             check_next_angle(row[0], angles_deg.last().copied()).map_err(fail)?;
             angles_deg.push(row[0]);
             values.push(row.split_off(1));
         }
+        let last_line = rows[last].0;
         match angles_deg.last() {
-            None => Err(Error::parse(source, 1, NO_ROWS)),
             Some(&angle) if angle != 90.0 => Err(Error::parse(
                 source,
-                last + 1,
+                last_line,
                 format!("the last angle must be 90 (the table spans 0..90 degrees), found {angle}"),
             )),
-            Some(_) => {
-                let rgb = match &header {
-                    Header::Rgb => values.iter().map(|v| [v[0], v[1], v[2]]).collect(),
-                    Header::Spectral(nm) => {
+            _ => {
+                let rgb = match &header.channels {
+                    Channels::Rgb => values.iter().map(|v| [v[0], v[1], v[2]]).collect(),
+                    Channels::Spectral(nm) => {
                         values.iter().map(|v| reflectance_to_rgb(nm, v)).collect()
                     }
                 };
@@ -198,28 +208,46 @@ impl FresnelTable {
     }
 }
 
-/// The two kinds of CSV header.
-enum Header {
+/// The value columns of a CSV header.
+enum Channels {
     Rgb,
     /// Wavelengths [nm], strictly increasing, covering 380–780.
     Spectral(Vec<f64>),
 }
 
+/// A CSV header: its value columns and how its rows are written.
+struct Header {
+    channels: Channels,
+    separator: char,
+}
+
 impl Header {
     fn channel_count(&self) -> usize {
-        match self {
-            Header::Rgb => 3,
-            Header::Spectral(nm) => nm.len(),
+        match &self.channels {
+            Channels::Rgb => 3,
+            Channels::Spectral(nm) => nm.len(),
         }
     }
 
     fn column_name(&self, column: usize) -> String {
-        match (self, column) {
+        match (&self.channels, column) {
             (_, 0) => "angle_deg".into(),
-            (Header::Rgb, c) => ["r", "g", "b"][(c - 1).min(2)].into(),
-            (Header::Spectral(nm), c) => format!("{} nm", nm[c - 1]),
+            (Channels::Rgb, c) => ["r", "g", "b"][(c - 1).min(2)].into(),
+            (Channels::Spectral(nm), c) => format!("{} nm", nm[c - 1]),
         }
     }
+}
+
+/// A header cell as a wavelength in nm: a number, optionally followed by `nm` (`380`, `380.0`,
+/// `380nm`, `380 nm`, in any case); `None` if it is not a finite number. Shared by the Fresnel
+/// and the goniometer CSV, whose callers refuse a wavelength that is not > 0.
+pub fn wavelength_nm(name: &str) -> Option<f64> {
+    let name = name.trim();
+    let number = match name.len().checked_sub(2).and_then(|at| name.get(at..)) {
+        Some(unit) if unit.eq_ignore_ascii_case("nm") => name[..name.len() - 2].trim_end(),
+        _ => name,
+    };
+    number.parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
 const EXPECTED_HEADER: &str = "expected the header `angle_deg,r,g,b` (RGB) or \
@@ -229,46 +257,62 @@ const EXPECTED_HEADER: &str = "expected the header `angle_deg,r,g,b` (RGB) or \
 const NO_ROWS: &str =
     "the header has no data rows after it; add rows for 0..90 degrees (at least 0 and 90)";
 
-/// The header on line 1: RGB, or spectral with valid wavelengths.
-fn parse_header(line: &str, source: &str) -> Result<Header> {
-    let fail = |message: String| Err(Error::parse(source, 1, message));
-    let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-    if cells[0] != "angle_deg" {
-        if cells[0].parse::<f64>().is_ok() {
-            return fail(format!("missing header: line 1 is data; {EXPECTED_HEADER}"));
-        }
-        return fail(format!("wrong header `{line}`; {EXPECTED_HEADER}"));
+/// The header: RGB, or spectral with valid wavelengths; or why not.
+fn parse_header(line: &str) -> std::result::Result<Header, String> {
+    let separator = detect_separator(line);
+    let mut cells = split_cells(line, separator)?;
+    // A trailing separator leaves an unnamed last column; the rows may have it or not.
+    if cells.len() > 1 && cells.last().is_some_and(|c| c.is_empty()) {
+        cells.pop();
     }
-    if cells[1..] == ["r", "g", "b"] {
-        return Ok(Header::Rgb);
+    if !cells[0].eq_ignore_ascii_case("angle_deg") {
+        if parse_number(&cells[0], separator).is_some() {
+            return Err(format!(
+                "missing header: the first line is data; {EXPECTED_HEADER}"
+            ));
+        }
+        return Err(format!("wrong header `{line}`; {EXPECTED_HEADER}"));
+    }
+    let header = |channels| Header {
+        channels,
+        separator,
+    };
+    let rgb = ["r", "g", "b"];
+    if cells.len() == 4
+        && cells[1..]
+            .iter()
+            .zip(rgb)
+            .all(|(c, n)| c.eq_ignore_ascii_case(n))
+    {
+        return Ok(header(Channels::Rgb));
     }
     let mut nm = Vec::with_capacity(cells.len() - 1);
     for (column, cell) in cells.iter().enumerate().skip(1) {
         let n = column + 1;
-        match cell.parse::<f64>() {
-            Ok(v) if v.is_finite() && v > 0.0 => nm.push(v),
+        match wavelength_nm(cell) {
+            Some(v) if v > 0.0 => nm.push(v),
             // A wavelength of 0 or less has no light; -380 used to pass as covering 380 nm.
-            Ok(v) if v.is_finite() => {
-                return fail(format!(
+            Some(_) => {
+                return Err(format!(
                     "wrong header: column {n} `{cell}` is not a wavelength: wavelengths are \
                      lengths in nm, greater than 0 (the table covers {lo}–{hi} nm)",
                     lo = SPECTRAL_COVER_NM.0,
                     hi = SPECTRAL_COVER_NM.1
                 ));
             }
-            _ => {
-                return fail(format!(
+            None => {
+                return Err(format!(
                     "wrong header: column {n} `{cell}` is not a wavelength in nm; {EXPECTED_HEADER}"
                 ));
             }
         }
     }
     if nm.len() < 2 {
-        return fail(format!("wrong header `{line}`; {EXPECTED_HEADER}"));
+        return Err(format!("wrong header `{line}`; {EXPECTED_HEADER}"));
     }
     if let Some(i) = (1..nm.len()).find(|&i| nm[i] <= nm[i - 1]) {
         let (here, before) = (nm[i], nm[i - 1]);
-        return fail(format!(
+        return Err(format!(
             "wavelength {here} nm is not greater than {before} nm before it; \
              wavelengths must strictly increase"
         ));
@@ -276,12 +320,12 @@ fn parse_header(line: &str, source: &str) -> Result<Header> {
     let (lo, hi) = SPECTRAL_COVER_NM;
     let (first, last) = (nm[0], nm[nm.len() - 1]);
     if first > lo || last < hi {
-        return fail(format!(
+        return Err(format!(
             "wavelengths {first}–{last} nm do not cover {lo}–{hi} nm; \
              add columns down to {lo} nm and up to {hi} nm"
         ));
     }
-    Ok(Header::Spectral(nm))
+    Ok(header(Channels::Spectral(nm)))
 }
 
 /// One data row: `1 + channels` finite numbers, reflectances in [0, 1]; or why not.
@@ -292,28 +336,33 @@ fn parse_row(line: &str, header: &Header) -> std::result::Result<Vec<f64>, Strin
                 .into(),
         );
     }
-    let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+    let mut cells = split_cells(line, header.separator)?;
     let columns = 1 + header.channel_count();
+    // A trailing separator on the rows, with or without one on the header, is the same table.
+    if cells.len() == columns + 1 && cells.last().is_some_and(|c| c.is_empty()) {
+        cells.pop();
+    }
     if cells.len() != columns {
         let found = cells.len();
         return Err(format!(
-            "expected {columns} comma-separated columns as in the header on line 1, found {found}"
+            "expected {columns} columns separated by {} as in the header, found {found}",
+            separator_name(header.separator)
         ));
     }
     let mut row = Vec::with_capacity(columns);
     for (column, cell) in cells.iter().enumerate() {
         let name = header.column_name(column);
-        let v = match cell.parse::<f64>() {
-            Ok(v) if v.is_finite() => v,
-            Ok(_) => {
+        let v = match parse_number(cell, header.separator) {
+            Some(v) if v.is_finite() => v,
+            Some(_) => {
                 return Err(format!(
                     "`{name}` = `{cell}` is not finite; use a finite number"
                 ))
             }
-            Err(_) if cell.is_empty() => {
+            None if cell.is_empty() => {
                 return Err(format!("`{name}` is empty; put a number there"))
             }
-            Err(_) => return Err(format!("`{name}` = `{cell}` is not a number")),
+            None => return Err(format!("`{name}` = `{cell}` is not a number")),
         };
         if column > 0 && !(0.0..=1.0).contains(&v) {
             return Err(format!(
@@ -624,6 +673,49 @@ mod tests {
     }
 
     #[test]
+    fn rgb_csv_reads_any_case_trailing_separators_comments_and_other_dialects() {
+        // Each said "column 2 `R` is not a wavelength" or "wrong header"; all are this table.
+        let plain =
+            FresnelTable::from_csv_str("angle_deg,r,g,b\n0,0.04,0.05,0.06\n90,1,1,1\n", "t")
+                .unwrap();
+        for text in [
+            "ANGLE_DEG,R,G,B\n0,0.04,0.05,0.06\n90,1,1,1\n",
+            "angle_deg,r,g,b,\n0,0.04,0.05,0.06,\n90,1,1,1,\n",
+            "angle_deg,r,g,b,\n0,0.04,0.05,0.06\n90,1,1,1\n",
+            "# measured 2024\n\nangle_deg,r,g,b\n0,0.04,0.05,0.06\n# lamp changed\n90,1,1,1\n",
+            "angle_deg,r,g,b\r0,0.04,0.05,0.06\r90,1,1,1\r",
+            "angle_deg;r;g;b\n0;0,04;0,05;0,06\n90;1;1;1\n",
+            "angle_deg\tr\tg\tb\n0\t0.04\t0.05\t0.06\n90\t1\t1\t1\n",
+            "\"angle_deg\",\"r\",\"g\",\"b\"\n\"0\",\"0.04\",\"0.05\",\"0.06\"\n90,1,1,1\n",
+        ] {
+            let table =
+                FresnelTable::from_csv_str(text, "t").unwrap_or_else(|e| panic!("{text:?}: {e}"));
+            assert_eq!(table, plain, "{text:?}");
+        }
+    }
+
+    #[test]
+    fn spectral_headers_may_carry_their_unit() {
+        let plain =
+            FresnelTable::from_csv_str("angle_deg,380,580,780\n0,0.5,0.5,0.5\n90,1,1,1\n", "t")
+                .unwrap();
+        for header in [
+            "angle_deg,380nm,580 nm,780.0",
+            "Angle_Deg,380 NM,580.0nm,780",
+        ] {
+            let text = format!("{header}\n0,0.5,0.5,0.5\n90,1,1,1\n");
+            assert_eq!(
+                FresnelTable::from_csv_str(&text, "t").unwrap(),
+                plain,
+                "{header}"
+            );
+        }
+        assert_eq!(wavelength_nm(" 380 nm "), Some(380.0));
+        assert_eq!(wavelength_nm("nm"), None);
+        assert_eq!(wavelength_nm("inf"), None);
+    }
+
+    #[test]
     fn spectral_csv_goes_through_the_spectral_path() {
         // Flat spectra map to grey exactly (flat 1 → 1 by construction, flat 0.5 to rounding).
         let text = "angle_deg,370,500,790\n0,0.5,0.5,0.5\n90,1,1,1\n";
@@ -641,13 +733,12 @@ mod tests {
     #[test]
     fn every_csv_error_names_its_line() {
         #[rustfmt::skip]
-        let cases: [(&str, usize, &str); 22] = [
+        let cases: [(&str, usize, &str); 21] = [
             ("", 1, "empty file"),
             ("\u{feff}\n  \n", 1, "empty file"),
             ("0,0,0,0\n90,1,1,1\n", 1, "missing header"),
             ("angle,r,g,b\n0,0,0,0\n90,1,1,1\n", 1, "wrong header"),
             ("angle_deg,r,g\n0,0,0\n90,1,1\n", 1, "wrong header"),
-            ("angle_deg,r,g,b,\n0,0,0,0\n90,1,1,1\n", 1, "not a wavelength"),
             ("angle_deg,r,g,b\n", 1, "no data rows"),
             ("angle_deg,r,g,b\n0,0,0\n90,1,1,1\n", 2, "expected 4"),
             ("angle_deg,r,g,b\n0,0,0,0\n90,1,1,1,1\n", 3, "expected 4"),
