@@ -7,6 +7,11 @@
 //! machine has cores beside the render and writer threads (one on a 2-core machine, where the
 //! GPU is lavapipe on those cores and nothing is gained). The images they hold are bounded in
 //! bytes ([`InFlight`]), not in count, so that a batch of 8K images does not hold gigabytes.
+//!
+//! Jobs between the render thread and the writer are also bounded in count ([`Unwritten`]): a
+//! failed job carries no image, so the byte bound let a batch of failing jobs run thousands of
+//! jobs ahead of a slow writer, and the first Ctrl-C (which stops only the render thread) waited
+//! for all of them.
 
 use std::collections::BTreeMap;
 use std::sync::{mpsc, Condvar, Mutex};
@@ -24,6 +29,11 @@ pub const MAX_ENCODERS: usize = 8;
 /// let through, however large.
 pub const IN_FLIGHT_BYTES: u64 = 512 << 20;
 
+/// Jobs the render thread may be ahead of the writer (sent, not yet in the manifest): enough to
+/// keep [`MAX_ENCODERS`] encoders and the queues busy, few enough that the writer finishes them
+/// in milliseconds after a Ctrl-C.
+pub const MAX_UNWRITTEN: usize = 64;
+
 /// Encoder threads for this machine: its cores less the render and writer threads, 1 to
 /// [`MAX_ENCODERS`].
 pub fn encoder_count() -> usize {
@@ -36,8 +46,8 @@ pub fn encoder_count() -> usize {
 pub(super) enum Written {
     Rendered {
         row: ManifestRow,
-        /// The tile, or why the file could not be written.
-        result: Result<Thumbnail>,
+        /// The tile (if the contact sheet shows this job), or why the file could not be written.
+        result: Result<Option<Thumbnail>>,
     },
     /// A job whose output was already there (its tile read back from the file, if it can be).
     Skipped {
@@ -88,6 +98,55 @@ impl InFlight {
     }
 }
 
+/// Jobs sent by the render thread and not yet written by the writer, at most [`MAX_UNWRITTEN`];
+/// once the writer is gone (closed) nothing waits.
+pub(super) struct Unwritten {
+    state: Mutex<(usize, bool)>,
+    written: Condvar,
+}
+
+impl Unwritten {
+    pub fn new() -> Self {
+        Unwritten {
+            state: Mutex::new((0, true)),
+            written: Condvar::new(),
+        }
+    }
+
+    /// Waits until fewer than [`MAX_UNWRITTEN`] jobs are unwritten (or the writer is gone), then
+    /// counts one more.
+    pub fn acquire(&self) {
+        let mut state = self.state.lock().unwrap_or_else(|p| p.into_inner());
+        while state.0 >= MAX_UNWRITTEN && state.1 {
+            state = self.written.wait(state).unwrap_or_else(|p| p.into_inner());
+        }
+        state.0 += 1;
+    }
+
+    /// One job is written.
+    pub fn release(&self) {
+        let mut state = self.state.lock().unwrap_or_else(|p| p.into_inner());
+        state.0 = state.0.saturating_sub(1);
+        self.written.notify_all();
+    }
+
+    /// The writer is gone: nothing will be released again.
+    pub fn close(&self) {
+        let mut state = self.state.lock().unwrap_or_else(|p| p.into_inner());
+        state.1 = false;
+        self.written.notify_all();
+    }
+}
+
+/// Closes [`Unwritten`] when the writer ends, however it ends (a panic too).
+pub(super) struct Writing<'a>(pub &'a Unwritten);
+
+impl Drop for Writing<'_> {
+    fn drop(&mut self) {
+        self.0.close();
+    }
+}
+
 /// Tells [`InFlight`] that its encoder is gone, however it ends (a panic too).
 struct Running<'a>(&'a InFlight);
 
@@ -125,14 +184,15 @@ pub(super) fn encode_loop(
                 path,
                 image,
                 png,
+                tile,
             } => Written::Rendered {
                 row,
                 result: write_image(sink, &path, &image, &png)
-                    .map(|()| Thumbnail::from_hdr(&image, &png)),
+                    .map(|()| tile.then(|| Thumbnail::from_hdr(&image, &png))),
             },
-            Message::Skipped { row, path } => Written::Skipped {
+            Message::Skipped { row, path, tile } => Written::Skipped {
                 row,
-                thumbnail: thumbnail_from_file(&path),
+                thumbnail: tile.then(|| thumbnail_from_file(&path)).flatten(),
             },
             Message::Failed { row } => Written::Failed { row },
         };
@@ -162,7 +222,7 @@ pub(super) fn in_order(
 
 #[cfg(test)]
 mod tests {
-    use super::{in_order, InFlight, Written, IN_FLIGHT_BYTES};
+    use super::{in_order, InFlight, Unwritten, Written, IN_FLIGHT_BYTES, MAX_UNWRITTEN};
     use crate::scene::batch::manifest::ManifestRow;
 
     fn failed(job: usize) -> Written {
@@ -200,5 +260,36 @@ mod tests {
         in_flight.encoder_gone();
         // Over the budget with no encoder left to free it: returns at once.
         in_flight.acquire(IN_FLIGHT_BYTES);
+    }
+
+    /// The render thread waits once MAX_UNWRITTEN jobs are unwritten, and goes on when one is
+    /// written or the writer is gone.
+    #[test]
+    fn unwritten_jobs_are_bounded_in_count_until_the_writer_is_gone() {
+        let unwritten = std::sync::Arc::new(Unwritten::new());
+        for _ in 0..MAX_UNWRITTEN {
+            unwritten.acquire();
+        }
+        let waiting = {
+            let unwritten = std::sync::Arc::clone(&unwritten);
+            std::thread::spawn(move || {
+                unwritten.acquire();
+                unwritten.acquire();
+            })
+        };
+        // Long enough for the thread to have passed an acquire that does not wait.
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        assert!(
+            !waiting.is_finished(),
+            "a job past the bound was let through"
+        );
+        unwritten.release();
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        assert!(
+            !waiting.is_finished(),
+            "two jobs passed where one was written"
+        );
+        unwritten.close();
+        waiting.join().unwrap();
     }
 }

@@ -13,16 +13,23 @@
 //!
 //! Cancellation ([`BatchOptions::cancel`], set by the CLI's SIGINT handler): the render thread
 //! takes no new job, the writer finishes the images already rendered, and the manifest and
-//! contact sheet describe what finished, so the same command resumes.
+//! contact sheet describe what finished, so the same command resumes. The render thread is at
+//! most [`MAX_UNWRITTEN`](super::encoders::MAX_UNWRITTEN) jobs ahead of the writer, so that takes
+//! moments whatever the batch.
+//!
+//! Memory does not grow with the batch beyond a few bytes a job: jobs are made from their ids as
+//! they run, resume keeps a hash per finished job ([`manifest::Finished`]), manifest rows go to
+//! the file as they finish and the contact sheet is bounded ([`super::sheet`]).
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc, Mutex};
 
-use super::encoders::{encode_loop, encoder_count, in_order, message_bytes, InFlight, Written};
-use super::manifest::{self, Manifest, ManifestRow, STATUS_OK};
-use super::sheet::{contact_sheet_png, Thumbnail, Tile};
+use super::encoders::{
+    encode_loop, encoder_count, in_order, message_bytes, InFlight, Unwritten, Writing, Written,
+};
+use super::manifest::{self, Finished, ManifestRow, ManifestWriter, STATUS_OK};
+use super::sheet::{label, ContactSheet, SheetLayout, Thumbnail, Tile};
 use super::sink::{self, FileSystem, OutputSink};
 use super::{in_shard, BatchPlan, JobSpec, PreparedJob};
 use crate::gpu::GpuContext;
@@ -112,10 +119,13 @@ pub(super) enum Message {
         path: PathBuf,
         image: HdrImage,
         png: PngSettings,
+        /// Whether the contact sheet shows this job (its thumbnail is made).
+        tile: bool,
     },
     Skipped {
         row: ManifestRow,
         path: PathBuf,
+        tile: bool,
     },
     Failed {
         row: ManifestRow,
@@ -135,14 +145,13 @@ pub fn run_batch(
         path: options.out_dir.clone(),
         message: format!("cannot create the output directory: {e}"),
     })?;
-    let jobs: Vec<JobSpec> = (0..plan.job_count())
-        .filter(|&id| in_shard(id, options.shard))
-        .map(|id| plan.job(id))
-        .collect();
+    let shard = options.shard;
+    let ids = || (0..plan.job_count()).filter(move |&id| in_shard(id, shard));
+    let total = ids().count();
     let previous = if options.force {
-        BTreeMap::new()
+        Finished::default()
     } else {
-        manifest::previous_rows(&options.out_dir)
+        Finished::read(&options.out_dir)
     };
     let sweep_paths: Vec<String> = plan.sweeps.iter().map(|s| s.path.clone()).collect();
     let manifest_path = options.out_dir.join(manifest::manifest_name(options.shard));
@@ -152,20 +161,27 @@ pub fn run_batch(
     };
     remove_leftover_temps(
         plan,
-        &jobs,
+        ids(),
         options,
         [&manifest_path, Path::new(&sheet_name)],
     );
     let mut renderer = SceneRenderer::new(gpu)?;
     let observer = options.observer.as_ref();
-    observer.start(jobs.len());
+    observer.start(total);
 
     let (sender, receiver) = mpsc::sync_channel::<(usize, Message)>(WRITER_QUEUE);
     let (done, written) = mpsc::channel();
     let receiver = Mutex::new(receiver);
     let encoder_count = options.encoders.max(1);
     let in_flight = InFlight::new(encoder_count);
-    let writer_manifest = Manifest::new(manifest_path.clone(), &sweep_paths);
+    let unwritten = Unwritten::new();
+    let layout = SheetLayout::new(total, sweep_paths.len());
+    let writer = Writer {
+        manifest: ManifestWriter::new(manifest_path, &sweep_paths),
+        sheet: ContactSheet::new(layout.clone()),
+        columns: sweep_paths,
+        counts: Counts::default(),
+    };
     let sink: &dyn OutputSink = options.sink.as_ref();
     let mut started = 0;
     let result = std::thread::scope(|scope| {
@@ -177,21 +193,27 @@ pub fn run_batch(
             })
             .collect();
         drop(done);
-        let writer = scope.spawn(move || write_loop(written, writer_manifest, observer, sink));
-        for job in &jobs {
+        let unwritten = &unwritten;
+        let writer = scope.spawn(move || writer.run(written, unwritten, observer, sink));
+        for id in ids() {
             if options.cancel.load(Ordering::SeqCst) {
                 break;
             }
+            let place = started;
             started += 1;
-            let message = render_job(gpu, &mut renderer, plan, job, &options.out_dir, &previous);
+            let job = plan.job(id);
+            let tile = layout.shows(place);
+            let message = render_job(gpu, &mut renderer, plan, &job, options, &previous, tile);
             for warning in renderer.take_warnings() {
                 observer.line(&format!("warning: {warning}"));
             }
             if let Message::Failed { row } = &message {
                 observer.line(&format!("error: job {}: {}", row.job, row.status));
             }
+            // Bounded in count (failed jobs carry no image) and in image bytes.
+            unwritten.acquire();
             in_flight.acquire(message_bytes(&message));
-            if sender.send((started - 1, message)).is_err() {
+            if sender.send((place, message)).is_err() {
                 break; // The encoders stopped: the writer's error is returned below.
             }
         }
@@ -203,40 +225,39 @@ pub fn run_batch(
         writer.join().map_err(|_| panicked("writer thread"))?
     });
     observer.finish();
-    let (manifest, tiles, counts) = result?;
+    let (manifest_path, sheet, counts) = result?;
     let sheet_path = options.out_dir.join(sheet_name);
-    let labelled: Vec<Tile> = tiles.into_values().collect();
-    sink::write_file(sink, &sheet_path, &contact_sheet_png(&labelled)?)?;
+    sink::write_file(sink, &sheet_path, &sheet.finish()?)?;
     Ok(BatchSummary {
-        rendered: counts.0,
-        skipped: counts.1,
-        failed: counts.2,
-        cancelled: started < jobs.len(),
-        not_started: jobs.len() - started,
-        manifest: manifest.path,
+        rendered: counts.rendered,
+        skipped: counts.skipped,
+        failed: counts.failed,
+        cancelled: started < total,
+        not_started: total - started,
+        manifest: manifest_path,
         contact_sheet: sheet_path,
     })
 }
 
 /// Temporary files a killed run left next to this shard's outputs (either format), its manifest
-/// and its contact sheet.
+/// and its contact sheet. The names are made only if the directory holds a temporary file.
 fn remove_leftover_temps(
     plan: &BatchPlan,
-    jobs: &[JobSpec],
+    ids: impl Iterator<Item = usize>,
     options: &BatchOptions,
     own: [&Path; 2],
 ) {
-    let mut names: Vec<String> = own
-        .iter()
+    let own = own
+        .into_iter()
         .filter_map(|p| p.file_name())
-        .map(|n| n.to_string_lossy().into_owned())
-        .collect();
-    for job in jobs {
-        for format in [OutputFormat::Png, OutputFormat::Exr] {
-            names.extend(plan.file_name(job, format));
-        }
-    }
-    let removed = sink::remove_leftover_temps(&options.out_dir, &names);
+        .map(|n| n.to_string_lossy().into_owned());
+    let outputs = ids.flat_map(|id| {
+        let job = plan.job(id);
+        [OutputFormat::Png, OutputFormat::Exr]
+            .into_iter()
+            .filter_map(move |format| plan.file_name(&job, format).ok())
+    });
+    let removed = sink::remove_leftover_temps(&options.out_dir, own.chain(outputs));
     if removed > 0 {
         options.observer.line(&format!(
             "removed {removed} temporary file(s) an interrupted run left in {}",
@@ -251,12 +272,17 @@ fn render_job(
     renderer: &mut SceneRenderer,
     plan: &BatchPlan,
     job: &JobSpec,
-    out_dir: &Path,
-    previous: &BTreeMap<usize, ManifestRow>,
+    options: &BatchOptions,
+    previous: &Finished,
+    tile: bool,
 ) -> Message {
     let mut row = ManifestRow {
         job: job.id,
-        values: job.values.iter().map(|(_, v)| v.value.to_text()).collect(),
+        values: job
+            .values
+            .iter()
+            .map(|(_, v)| manifest::value_text(&v.value))
+            .collect(),
         output: String::new(),
         scene_hash: String::new(),
         status: STATUS_OK.into(),
@@ -269,11 +295,11 @@ fn render_job(
             return Message::Failed { row };
         }
     };
-    let path = out_dir.join(&prepared.file_name);
+    let path = options.out_dir.join(&prepared.file_name);
     row.output = prepared.file_name.clone();
     row.scene_hash = prepared.scene_hash.clone();
-    if manifest::is_done(previous.get(&job.id), &prepared.scene_hash, &path) {
-        return Message::Skipped { row, path };
+    if previous.is_done(job.id, &prepared.scene_hash, &path) {
+        return Message::Skipped { row, path, tile };
     }
     let png = PngSettings {
         exposure_ev: prepared.scene.output.exposure_ev,
@@ -287,6 +313,7 @@ fn render_job(
             path,
             image,
             png,
+            tile,
         },
         Err(e) => {
             // A file from an earlier run would pass for this job's output.
@@ -297,27 +324,76 @@ fn render_job(
     }
 }
 
-type WriterResult = (Manifest, BTreeMap<usize, Tile>, (usize, usize, usize));
+/// Jobs rendered, skipped and failed.
+#[derive(Default)]
+struct Counts {
+    rendered: usize,
+    skipped: usize,
+    failed: usize,
+}
 
-/// The writer thread: in job order, the manifest row, the tile and the progress of each job the
-/// encoders finished; the manifest is saved after every job so a killed run can resume. A
-/// manifest that cannot be saved (a full disk) is retried after the next job and must be saved
-/// at the end.
-fn write_loop(
-    receiver: mpsc::Receiver<(usize, Written)>,
-    mut manifest: Manifest,
-    observer: &dyn BatchObserver,
-    sink: &dyn OutputSink,
-) -> Result<WriterResult> {
-    let mut tiles = BTreeMap::new();
-    let (mut rendered, mut skipped, mut failed) = (0, 0, 0);
-    let mut manifest_warned = false;
-    in_order(receiver, |written| {
+/// The writer thread's state: what it records of each job the encoders finished.
+struct Writer {
+    manifest: ManifestWriter,
+    sheet: ContactSheet,
+    /// The sweep paths, for tile labels.
+    columns: Vec<String>,
+    counts: Counts,
+}
+
+impl Writer {
+    /// In job order: the manifest row (appended at once, so a killed run can resume), the tile
+    /// and the progress of each job. A row that cannot be written (a full disk) is retried with
+    /// the next one and must be written at the end; so must the contact sheet's tiles.
+    fn run(
+        mut self,
+        receiver: mpsc::Receiver<(usize, Written)>,
+        unwritten: &Unwritten,
+        observer: &dyn BatchObserver,
+        sink: &dyn OutputSink,
+    ) -> Result<(PathBuf, ContactSheet, Counts)> {
+        let _writing = Writing(unwritten);
+        let mut manifest_warned = false;
+        let mut sheet_error = None;
+        let mut place = 0;
+        in_order(receiver, |written| {
+            let (row, image) = self.record(written, observer);
+            if let Err(e) = self.manifest.append(&row, sink) {
+                if !manifest_warned {
+                    observer.line(&format!("warning: {e}; retrying after the next job"));
+                    manifest_warned = true;
+                }
+            }
+            unwritten.release();
+            if sheet_error.is_none() {
+                let tile = Tile {
+                    lines: label(&row, &self.columns),
+                    failed: row.status != STATUS_OK,
+                    image,
+                };
+                sheet_error = self.sheet.add(place, tile).err();
+            }
+            place += 1;
+            observer.job_done();
+        });
+        self.manifest.finish(sink)?;
+        match sheet_error {
+            Some(e) => Err(e),
+            None => Ok((self.manifest.path, self.sheet, self.counts)),
+        }
+    }
+
+    /// Counts the job and gives its manifest row and tile image.
+    fn record(
+        &mut self,
+        written: Written,
+        observer: &dyn BatchObserver,
+    ) -> (ManifestRow, Option<Thumbnail>) {
         let (mut row, image) = match written {
             Written::Rendered { row, result } => match result {
                 Ok(thumbnail) => {
-                    rendered += 1;
-                    (row, Some(thumbnail))
+                    self.counts.rendered += 1;
+                    (row, thumbnail)
                 }
                 Err(e) => {
                     observer.line(&format!("error: job {}: {e}", row.job));
@@ -329,40 +405,17 @@ fn write_loop(
                 }
             },
             Written::Skipped { row, thumbnail } => {
-                skipped += 1;
+                self.counts.skipped += 1;
                 (row, thumbnail)
             }
             Written::Failed { row } => (row, None),
         };
         if row.status != STATUS_OK {
-            failed += 1;
-            if image.is_none() && !row.output.is_empty() {
-                row.output.clear();
-            }
+            self.counts.failed += 1;
+            row.output.clear();
         }
-        let mut lines = vec![format!("#{}", row.job)];
-        lines.extend(
-            manifest
-                .columns
-                .iter()
-                .zip(&row.values)
-                .map(|(path, value)| format!("{} = {value}", short_path(path))),
-        );
-        if row.status != STATUS_OK {
-            lines.push("FAILED (see manifest)".into());
-        }
-        tiles.insert(row.job, Tile { image, lines });
-        manifest.rows.insert(row.job, row);
-        if let Err(e) = manifest.save(sink) {
-            if !manifest_warned {
-                observer.line(&format!("warning: {e}; retrying after the next job"));
-                manifest_warned = true;
-            }
-        }
-        observer.job_done();
-    });
-    manifest.save(sink)?;
-    Ok((manifest, tiles, (rendered, skipped, failed)))
+        (row, image)
+    }
 }
 
 /// Encodes in memory (format by extension), then writes atomically through `sink`.
@@ -380,11 +433,6 @@ pub(super) fn write_image(
         Ok(bytes) => sink::write_file(sink, path, &bytes),
         Err(cause) => Err(output::atomic::failed_write(path, &cause.to_string())),
     }
-}
-
-/// `object.0.material.r` → `0.material.r`: enough to tell sweeps apart on a 192-pixel tile.
-fn short_path(path: &str) -> &str {
-    path.strip_prefix("object.").unwrap_or(path)
 }
 
 /// The tile of a job skipped on resume, read back from its output.

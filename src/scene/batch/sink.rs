@@ -1,9 +1,10 @@
 //! Where a batch's files go: the [`OutputSink`] seam between the writer thread and the disk.
 //!
-//! Every file a batch writes (images, manifest, contact sheet) goes through [`write_file`]:
-//! a temporary file next to the target → the sink writes the bytes into it → fsync → rename. On
-//! any error the temporary file is removed, no file is left at the target (the stale-file policy
-//! of `output::atomic` applies) and the error names the file and the cause.
+//! Every file a batch writes (images, contact sheet, the manifest's first write) goes through
+//! [`write_file`]: a temporary file next to the target → the sink writes the bytes into it →
+//! fsync → rename. On any error the temporary file is removed, no file is left at the target (the
+//! stale-file policy of `output::atomic` applies) and the error names the file and the cause.
+//! The manifest's later rows are appended through the same sink.
 //!
 //! The default sink, [`FileSystem`], simply writes the bytes. A library user (in practice a test)
 //! may hand [`super::BatchOptions`] a sink that fails, e.g. with ENOSPC after N bytes, to check
@@ -14,15 +15,17 @@
 use std::collections::HashSet;
 use std::fs::{self, File};
 use std::io::{self, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::output::atomic::write_atomically_with;
 use crate::Result;
 
 /// Writes the bytes of one batch file into the temporary file that becomes the target.
 pub trait OutputSink: Send + Sync + std::fmt::Debug {
-    /// Writes all of `bytes` into `file`, the freshly created temporary file that is renamed to
-    /// `target` once complete. An error leaves nothing at `target`.
+    /// Writes all of `bytes` into `file`: the freshly created temporary file that is renamed to
+    /// `target` once complete (an error leaves nothing at `target`), or the manifest `target`
+    /// itself, open for appending rows (an error is cut back off it:
+    /// [`super::manifest::ManifestWriter`]).
     fn write_bytes(&self, target: &Path, file: &mut File, bytes: &[u8]) -> io::Result<()> {
         let _ = target;
         file.write_all(bytes)
@@ -44,24 +47,43 @@ pub fn write_file(sink: &dyn OutputSink, path: &Path, bytes: &[u8]) -> Result<()
 
 /// Removes temporary files that a killed run (SIGKILL, a second Ctrl-C, a power cut) left next to
 /// the files named in `names`; returns how many. Only this run's names are touched, so shards
-/// writing into the same directory keep their own temporaries.
-pub fn remove_leftover_temps(dir: &Path, names: &[String]) -> usize {
+/// writing into the same directory keep their own temporaries. `names` is read only if the
+/// directory holds a temporary file at all: a run of a million jobs names two million files.
+pub fn remove_leftover_temps(dir: &Path, names: impl IntoIterator<Item = String>) -> usize {
     let Ok(entries) = fs::read_dir(dir) else {
         return 0;
     };
-    let stems: HashSet<String> = names.iter().map(|n| temp_stem(n)).collect();
-    entries
+    // `.<stem>.<pid>-<n>.tmp`: the stem may hold dots, the `<pid>-<n>` part has none.
+    let temps: Vec<(PathBuf, String)> = entries
         .flatten()
-        .filter(|entry| {
-            // `.<stem>.<pid>-<n>.tmp`: the stem may hold dots, the `<pid>-<n>` part has none.
+        .filter(|entry| entry.file_type().is_ok_and(|t| t.is_file()))
+        .filter_map(|entry| {
             let name = entry.file_name().to_string_lossy().into_owned();
-            name.strip_prefix('.')
+            let stem = name
+                .strip_prefix('.')
                 .and_then(|rest| rest.strip_suffix(".tmp"))
                 .and_then(|rest| rest.rsplit_once('.'))
-                .is_some_and(|(stem, _)| stems.contains(stem))
+                .map(|(stem, _)| stem.to_string())?;
+            Some((entry.path(), stem))
         })
-        .filter(|entry| entry.file_type().is_ok_and(|t| t.is_file()))
-        .filter(|entry| fs::remove_file(entry.path()).is_ok())
+        .collect();
+    if temps.is_empty() {
+        return 0;
+    }
+    let mut stems: HashSet<&str> = temps.iter().map(|(_, stem)| stem.as_str()).collect();
+    let mut ours = HashSet::new();
+    for name in names {
+        if stems.is_empty() {
+            break;
+        }
+        if let Some(stem) = stems.take(temp_stem(&name).as_str()) {
+            ours.insert(stem);
+        }
+    }
+    temps
+        .iter()
+        .filter(|(_, stem)| ours.contains(stem.as_str()))
+        .filter(|(path, _)| fs::remove_file(path).is_ok())
         .count()
 }
 
@@ -122,7 +144,7 @@ mod tests {
         ] {
             fs::write(dir.path().join(name), b"x").unwrap();
         }
-        let removed = remove_leftover_temps(dir.path(), &["a.png".into()]);
+        let removed = remove_leftover_temps(dir.path(), ["a.png".to_string()]);
         assert_eq!(removed, 2);
         assert_eq!(entries(dir.path()), vec![".b.png.7-b1.tmp", "a.png"]);
     }

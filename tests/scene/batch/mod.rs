@@ -1,3 +1,4 @@
 mod cli;
 mod faults;
 mod names;
+mod scale;
