@@ -53,7 +53,7 @@ pub fn run_fit(args: FitArgs) -> Result<()> {
     let reference = named.map(|(material, _)| material);
     let data = read_measurements(&args.data)?;
     eprintln!(
-        "read {} rows on {} board(s) from {}; fitting",
+        "read {} row(s) on {} board(s) from {}; fitting",
         data.rows.len(),
         data.samples.len(),
         args.data.display()

@@ -2,16 +2,21 @@
 //! `sample,r,theta_i_deg,theta_o_deg,phi_deg,` then `R,G,B` or wavelengths in nm covering
 //! 380–780; one row per measured value, reflectance factors π·f_r.
 //!
-//! Owns reading (every bad cell is an [`Error::Parse`] naming the line) and writing. Spectral rows
-//! are converted to linear RGB by SPEC §3's spectral path on reading; the fit never sees spectra
+//! Owns reading (every bad cell is an [`Error::Parse`] naming the line) and writing. A file is
+//! read line by line, never held whole, and at most [`MAX_GONIOMETER_ROWS`] rows. The separator
+//! (`,`, `;` or tab), quoted cells and decimal commas are [`crate::text`]'s; header names are
+//! read in any case, and columns the fit does not use are left out with a note. Spectral rows are
+//! converted to linear RGB by SPEC §3's spectral path on reading; the fit never sees spectra
 //! (every term of the model is linear in the spectral quantities, so this is exact: see the doc).
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::path::Path;
 
 use super::data::{light_direction, view_direction, Measurement, Measurements, Sample};
+use crate::model::fresnel::wavelength_nm;
 use crate::model::spectral::reflectance_to_rgb;
-use crate::text::read_text_file;
+use crate::text::{detect_separator, for_each_line, numbered_lines, parse_number, split_cells};
 use crate::{Error, Result};
 
 /// The geometry columns, in the order they are written.
@@ -23,80 +28,36 @@ pub const RGB_COLUMNS: [&str; 3] = ["R", "G", "B"];
 const HEADER_HELP: &str = "the header must name sample, r, theta_i_deg, theta_o_deg, phi_deg \
     and then R,G,B or wavelengths in nm covering 380–780 (e.g. 380,390,…,780)";
 
-/// The largest goniometer CSV read (1 GiB): a dense measurement of a few million rows.
+/// The largest goniometer CSV read (1 GiB), refused from its length before reading: ~650 000
+/// spectral rows of 81 wavelengths. The rows are capped by [`MAX_GONIOMETER_ROWS`] too.
 pub const MAX_GONIOMETER_CSV_BYTES: u64 = 1 << 30;
 
-/// Reads a goniometer CSV file (at most [`MAX_GONIOMETER_CSV_BYTES`]).
+/// The most rows read (1 000 000). A goniophotometer measurement is thousands to hundreds of
+/// thousands of rows; the fit holds ~500 bytes a row (0.5 GB here, ~12 s), so the 12 million
+/// rows a 1 GiB RGB file can hold took 6.2 GB and 143 s.
+pub const MAX_GONIOMETER_ROWS: usize = 1_000_000;
+
+/// Reads a goniometer CSV file line by line (at most [`MAX_GONIOMETER_CSV_BYTES`] and
+/// [`MAX_GONIOMETER_ROWS`] rows).
 pub fn read_goniometer_csv(path: &Path) -> Result<Measurements> {
-    let text = read_text_file(path, MAX_GONIOMETER_CSV_BYTES, "goniometer CSV")?;
-    parse_goniometer_csv(&text, &path.display().to_string())
+    let mut reader = Reader::new(&path.display().to_string());
+    for_each_line(
+        path,
+        MAX_GONIOMETER_CSV_BYTES,
+        "goniometer CSV",
+        |number, line| reader.line(number, line),
+    )?;
+    reader.finish()
 }
 
-/// Parses goniometer CSV text; `source` names it in errors. A UTF-8 BOM, CRLF line ends,
-/// whitespace around cells, blank lines and `#` comment lines are accepted.
+/// Parses goniometer CSV text; `source` names it in errors. A UTF-8 BOM, any line end (LF, CRLF,
+/// CR), whitespace around cells, blank lines and `#` comment lines are accepted.
 pub fn parse_goniometer_csv(text: &str, source: &str) -> Result<Measurements> {
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, line)| (i + 1, line.trim()))
-        .filter(|(_, line)| !line.is_empty() && !line.starts_with('#'));
-    let Some((header_line, header_text)) = lines.next() else {
-        return Err(Error::parse(
-            source,
-            1,
-            format!("empty file; {HEADER_HELP}"),
-        ));
-    };
-    let header = Header::parse(header_text).map_err(|m| Error::parse(source, header_line, m))?;
-    let mut data = Measurements {
-        source: source.to_string(),
-        samples: Vec::new(),
-        rows: Vec::new(),
-    };
-    // Sample name → (index, line that first gave its r).
-    let mut sample_index: HashMap<String, (usize, usize)> = HashMap::new();
-    for (line, text) in lines {
-        let fail = |message: String| Error::parse(source, line, message);
-        let row = header.parse_row(text).map_err(fail)?;
-        let index = match sample_index.get(&row.sample) {
-            Some(&(index, first_line)) => {
-                let r = data.samples[index].lacquer_ratio;
-                if r != row.lacquer_ratio {
-                    return Err(fail(format!(
-                        "sample `{}` has r = {} here but r = {r} on line {first_line}; a sample is \
-                         one board with one lacquer ratio",
-                        row.sample, row.lacquer_ratio
-                    )));
-                }
-                index
-            }
-            None => {
-                let index = data.samples.len();
-                sample_index.insert(row.sample.clone(), (index, line));
-                data.samples.push(Sample {
-                    name: row.sample,
-                    lacquer_ratio: row.lacquer_ratio,
-                });
-                index
-            }
-        };
-        data.rows.push(Measurement {
-            sample: index,
-            light: light_direction(row.angles[0]),
-            view: view_direction(row.angles[1], row.angles[2]),
-            reflectance: row.rgb,
-            line,
-        });
+    let mut reader = Reader::new(source);
+    for (number, line) in numbered_lines(text) {
+        reader.line(number, line)?;
     }
-    if data.rows.is_empty() {
-        return Err(Error::parse(
-            source,
-            header_line,
-            "the header has no data rows after it; add one row per measured value",
-        ));
-    }
-    Ok(data)
+    reader.finish()
 }
 
 /// Writes rows as an RGB goniometer CSV, with `comment` lines (prefixed `# `) first. `angles`
@@ -122,6 +83,104 @@ pub fn goniometer_csv(data: &Measurements, angles: &[[f64; 3]], comment: &str) -
     csv
 }
 
+/// The reading state: the header once found, the data so far and each sample's first line.
+struct Reader {
+    header: Option<(usize, Header)>,
+    data: Measurements,
+    /// Sample name → (index, line that first gave its r).
+    sample_index: HashMap<String, (usize, usize)>,
+}
+
+impl Reader {
+    fn new(source: &str) -> Self {
+        Reader {
+            header: None,
+            data: Measurements {
+                source: source.to_string(),
+                samples: Vec::new(),
+                rows: Vec::new(),
+                notes: Vec::new(),
+            },
+            sample_index: HashMap::new(),
+        }
+    }
+
+    /// One line of the file: skipped when blank or a comment, else the header or a row.
+    fn line(&mut self, number: usize, text: &str) -> Result<()> {
+        let text = text.trim();
+        if text.is_empty() || text.starts_with('#') {
+            return Ok(());
+        }
+        let source = &self.data.source;
+        let fail = |message: String| Error::parse(source, number, message);
+        let Some((_, header)) = &self.header else {
+            let header = Header::parse(text).map_err(fail)?;
+            if !header.ignored.is_empty() {
+                self.data.notes.push(header.ignored_note(source, number));
+            }
+            self.header = Some((number, header));
+            return Ok(());
+        };
+        if self.data.rows.len() == MAX_GONIOMETER_ROWS {
+            return Err(fail(format!(
+                "more than {MAX_GONIOMETER_ROWS} data rows; a goniophotometer measurement is \
+                 thousands to hundreds of thousands of rows, and the fit holds ~500 bytes a \
+                 row: thin the data (e.g. every other φ or θ_o) or fit each board on its own"
+            )));
+        }
+        let row = header.parse_row(text).map_err(fail)?;
+        let index = match self.sample_index.get(row.sample.as_ref()) {
+            Some(&(index, first_line)) => {
+                let r = self.data.samples[index].lacquer_ratio;
+                if r != row.lacquer_ratio {
+                    return Err(fail(format!(
+                        "sample `{}` has r = {} here but r = {r} on line {first_line}; a sample is \
+                         one board with one lacquer ratio",
+                        row.sample, row.lacquer_ratio
+                    )));
+                }
+                index
+            }
+            None => {
+                let index = self.data.samples.len();
+                let name = row.sample.into_owned();
+                self.sample_index.insert(name.clone(), (index, number));
+                self.data.samples.push(Sample {
+                    name,
+                    lacquer_ratio: row.lacquer_ratio,
+                });
+                index
+            }
+        };
+        self.data.rows.push(Measurement {
+            sample: index,
+            light: light_direction(row.angles[0]),
+            view: view_direction(row.angles[1], row.angles[2]),
+            reflectance: row.rgb,
+            line: number,
+        });
+        Ok(())
+    }
+
+    fn finish(self) -> Result<Measurements> {
+        let Some((header_line, _)) = self.header else {
+            return Err(Error::parse(
+                &self.data.source,
+                1,
+                format!("empty file; {HEADER_HELP}"),
+            ));
+        };
+        if self.data.rows.is_empty() {
+            return Err(Error::parse(
+                &self.data.source,
+                header_line,
+                "the header has no data rows after it; add one row per measured value",
+            ));
+        }
+        Ok(self.data)
+    }
+}
+
 /// The value columns of a header.
 enum Values {
     Rgb,
@@ -131,17 +190,23 @@ enum Values {
 
 /// Where each column is.
 struct Header {
+    separator: char,
     /// Column index of each of [`GEOMETRY_COLUMNS`].
     geometry: [usize; 5],
     /// Column indices of the values, in wavelength (or R, G, B) order.
     value_columns: Vec<usize>,
     values: Values,
+    /// The names as written (for messages).
     names: Vec<String>,
+    /// A trailing separator left an unnamed last column: rows may have that empty cell or not.
+    trailing_empty: bool,
+    /// Columns the fit does not use (left out, with a note).
+    ignored: Vec<usize>,
 }
 
 /// One parsed row.
-struct Row {
-    sample: String,
+struct Row<'a> {
+    sample: Cow<'a, str>,
     lacquer_ratio: f64,
     /// θ_i, θ_o, φ in degrees.
     angles: [f64; 3],
@@ -150,63 +215,116 @@ struct Row {
 
 impl Header {
     fn parse(line: &str) -> std::result::Result<Self, String> {
-        let names: Vec<String> = line.split(',').map(|c| c.trim().to_string()).collect();
-        if names.first().is_some_and(|c| c.parse::<f64>().is_ok()) {
+        let separator = detect_separator(line);
+        let names: Vec<String> = split_cells(line, separator)?
+            .into_iter()
+            .map(Cow::into_owned)
+            .collect();
+        if names
+            .first()
+            .is_some_and(|c| parse_number(c, separator).is_some())
+        {
             return Err(format!(
                 "missing header: the first line is data; {HEADER_HELP}"
             ));
         }
+        if names.len() == 1 {
+            return Err(format!(
+                "the header `{line}` is one column: separate the columns with `,`, `;` or tabs; \
+                 {HEADER_HELP}"
+            ));
+        }
+        let trailing_empty = names.last().is_some_and(String::is_empty);
+        let named = names.len() - usize::from(trailing_empty);
+        if let Some(i) = (0..named).find(|&i| names[i].is_empty()) {
+            return Err(format!(
+                "column {} of the header has no name (two separators in a row?); name the \
+                 column or remove it; {HEADER_HELP}",
+                i + 1
+            ));
+        }
+        let lower: Vec<String> = names[..named].iter().map(|n| n.to_lowercase()).collect();
+        let find = |wanted: &str| -> std::result::Result<Option<usize>, String> {
+            let found: Vec<usize> = (0..named).filter(|&i| lower[i] == wanted).collect();
+            match found[..] {
+                [] => Ok(None),
+                [one] => Ok(Some(one)),
+                [a, b, ..] => Err(format!(
+                    "column `{wanted}` appears twice (columns {} and {}); keep one",
+                    a + 1,
+                    b + 1
+                )),
+            }
+        };
+        let (ratio, red) = ratio_and_red(&names, &lower)?;
+        let green = find("g")?;
+        let blue = find("b")?;
         let mut geometry = [0; 5];
         for (slot, wanted) in geometry.iter_mut().zip(GEOMETRY_COLUMNS) {
-            *slot = names
-                .iter()
-                .position(|n| n == wanted)
-                .ok_or_else(|| format!("missing column `{wanted}`; {HEADER_HELP}"))?;
+            let found = if wanted == "r" { ratio } else { find(wanted)? };
+            *slot = found.ok_or_else(|| format!("missing column `{wanted}`; {HEADER_HELP}"))?;
         }
-        let rest: Vec<usize> = (0..names.len()).filter(|i| !geometry.contains(i)).collect();
-        if rest.is_empty() {
-            return Err(format!("missing the value columns; {HEADER_HELP}"));
-        }
-        let rgb: Vec<Option<usize>> = RGB_COLUMNS
-            .iter()
-            .map(|c| {
-                rest.iter()
-                    .copied()
-                    .find(|&i| names[i].eq_ignore_ascii_case(c))
-            })
+        let rgb = [red, green, blue];
+        let rest: Vec<usize> = (0..named)
+            .filter(|i| !geometry.contains(i) && !rgb.contains(&Some(*i)))
             .collect();
+        let mut header = Header {
+            separator,
+            geometry,
+            value_columns: Vec::new(),
+            values: Values::Rgb,
+            names,
+            trailing_empty,
+            ignored: Vec::new(),
+        };
         if rgb.iter().any(Option::is_some) {
-            if let Some(&extra) = rest.iter().find(|i| !rgb.contains(&Some(**i))) {
-                return Err(format!("unknown column `{}`; {HEADER_HELP}", names[extra]));
+            if let Some(&i) = rest.iter().find(|&&i| wavelength_nm(&lower[i]).is_some()) {
+                return Err(format!(
+                    "the header has R,G,B and the wavelength column `{}`: keep one kind of \
+                     value columns",
+                    header.names[i]
+                ));
             }
-            let value_columns = rgb
+            header.value_columns = rgb
                 .iter()
                 .zip(RGB_COLUMNS)
                 .map(|(c, name)| c.ok_or_else(|| format!("missing column `{name}`; {HEADER_HELP}")))
                 .collect::<std::result::Result<Vec<_>, _>>()?;
-            return Ok(Header {
-                geometry,
-                value_columns,
-                values: Values::Rgb,
-                names,
-            });
+            header.ignored = rest;
+            return Ok(header);
         }
-        Self::spectral(geometry, rest, names)
+        header.spectral(rest)?;
+        Ok(header)
     }
 
-    /// Every remaining column is a wavelength: increasing, covering 380–780 nm.
-    fn spectral(
-        geometry: [usize; 5],
-        value_columns: Vec<usize>,
-        names: Vec<String>,
-    ) -> std::result::Result<Self, String> {
-        let mut nm = Vec::with_capacity(value_columns.len());
-        for &i in &value_columns {
-            match names[i].parse::<f64>() {
+    /// The remaining columns named by a wavelength are the values: increasing, covering
+    /// 380–780 nm; the others are left out.
+    fn spectral(&mut self, rest: Vec<usize>) -> std::result::Result<(), String> {
+        let mut nm = Vec::with_capacity(rest.len());
+        for i in rest {
+            match wavelength_nm(&self.names[i]) {
                 // A wavelength is > 0 nm: `-380` passed as one and bent the resampling.
-                Ok(v) if v.is_finite() && v > 0.0 => nm.push(v),
-                _ => return Err(format!("unknown column `{}`; {HEADER_HELP}", names[i])),
+                Some(v) if v > 0.0 => {
+                    nm.push(v);
+                    self.value_columns.push(i);
+                }
+                Some(_) => {
+                    return Err(format!(
+                        "column `{}` is not a wavelength: wavelengths are in nm, greater than 0; \
+                         {HEADER_HELP}",
+                        self.names[i]
+                    ))
+                }
+                None => self.ignored.push(i),
             }
+        }
+        if nm.is_empty() {
+            let ignored: Vec<&str> = self.ignored.iter().map(|&i| &*self.names[i]).collect();
+            return Err(format!(
+                "missing the value columns: no R, G, B or wavelength column (the others are \
+                 `{}`); {HEADER_HELP}",
+                ignored.join("`, `")
+            ));
         }
         if let Some(i) = (1..nm.len()).find(|&i| nm[i] <= nm[i - 1]) {
             return Err(format!(
@@ -223,24 +341,42 @@ impl Header {
                  nm and up to 780 nm"
             ));
         }
-        Ok(Header {
-            geometry,
-            value_columns,
-            values: Values::Spectral(nm),
-            names,
-        })
+        self.values = Values::Spectral(nm);
+        Ok(())
     }
 
-    fn parse_row(&self, line: &str) -> std::result::Result<Row, String> {
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        if cells.len() != self.names.len() {
+    /// The note for the columns left out.
+    fn ignored_note(&self, source: &str, line: usize) -> String {
+        let shown: Vec<String> = self
+            .ignored
+            .iter()
+            .map(|&i| format!("`{}` (column {})", self.names[i], i + 1))
+            .collect();
+        format!(
+            "{source}:{line}: column(s) {} are not read: the fit reads sample, r, theta_i_deg, \
+             theta_o_deg, phi_deg and R,G,B or wavelengths in nm",
+            shown.join(", ")
+        )
+    }
+
+    fn parse_row<'a>(&self, line: &'a str) -> std::result::Result<Row<'a>, String> {
+        let mut cells = split_cells(line, self.separator)?;
+        let columns = self.names.len();
+        // A trailing separator on the rows and not the header, or on the header and not the
+        // rows, is the same table.
+        if cells.len() == columns + 1 && cells.last().is_some_and(|c| c.is_empty()) {
+            cells.pop();
+        } else if self.trailing_empty && cells.len() + 1 == columns {
+            cells.push(Cow::Borrowed(""));
+        }
+        if cells.len() != columns {
             return Err(format!(
-                "expected {} comma-separated cells as in the header, found {}",
-                self.names.len(),
+                "expected {columns} cells separated by {} as in the header, found {}",
+                crate::text::separator_name(self.separator),
                 cells.len()
             ));
         }
-        let sample = cells[self.geometry[0]];
+        let sample = std::mem::take(&mut cells[self.geometry[0]]);
         if sample.is_empty() {
             return Err("`sample` is empty; name the board this row was measured on".into());
         }
@@ -273,7 +409,7 @@ impl Header {
             Values::Spectral(nm) => reflectance_to_rgb(nm, &values),
         };
         Ok(Row {
-            sample: sample.to_string(),
+            sample,
             lacquer_ratio,
             angles: [theta_i, theta_o, phi],
             rgb,
@@ -281,13 +417,13 @@ impl Header {
     }
 
     /// A finite number in column `i`, or why not.
-    fn number(&self, cells: &[&str], i: usize) -> std::result::Result<f64, String> {
-        let (name, cell) = (&self.names[i], cells[i]);
-        match cell.parse::<f64>() {
-            Ok(v) if v.is_finite() => Ok(v),
-            Ok(_) => Err(format!("`{name}` = `{cell}` is not a finite number")),
-            Err(_) if cell.is_empty() => Err(format!("`{name}` is empty; put a number there")),
-            Err(_) => Err(format!("`{name}` = `{cell}` is not a number")),
+    fn number(&self, cells: &[Cow<str>], i: usize) -> std::result::Result<f64, String> {
+        let (name, cell) = (&self.names[i], &*cells[i]);
+        match parse_number(cell, self.separator) {
+            Some(v) if v.is_finite() => Ok(v),
+            Some(_) => Err(format!("`{name}` = `{cell}` is not a finite number")),
+            None if cell.is_empty() => Err(format!("`{name}` is empty; put a number there")),
+            None => Err(format!("`{name}` = `{cell}` is not a number")),
         }
     }
 
@@ -295,7 +431,7 @@ impl Header {
     /// `shown` in the message).
     fn angle(
         &self,
-        cells: &[&str],
+        cells: &[Cow<str>],
         g: usize,
         valid: impl Fn(f64) -> bool,
         shown: &str,
@@ -307,6 +443,32 @@ impl Header {
         } else {
             Err(format!("`{}` = {v} is outside {shown}", self.names[i]))
         }
+    }
+}
+
+/// The lacquer ratio `r` and the red channel `R` are one name in any case. Written `r` and `R`
+/// they are told apart by case; written alike (an upper-cased header: `SAMPLE,R,…,R,G,B`), the
+/// first is the ratio and the second red, the order the header is documented in. One such
+/// column is red only when written `R` beside G or B columns.
+fn ratio_and_red(
+    names: &[String],
+    lower: &[String],
+) -> std::result::Result<(Option<usize>, Option<usize>), String> {
+    let found: Vec<usize> = (0..lower.len()).filter(|&i| lower[i] == "r").collect();
+    let beside_green_or_blue = lower.iter().any(|n| n == "g" || n == "b");
+    match found[..] {
+        [] => Ok((None, None)),
+        [one] if names[one] == "R" && beside_green_or_blue => Ok((None, Some(one))),
+        [one] => Ok((Some(one), None)),
+        [a, b] if names[a] == "R" && names[b] == "r" => Ok((Some(b), Some(a))),
+        [a, b] => Ok((Some(a), Some(b))),
+        [a, b, c, ..] => Err(format!(
+            "columns {}, {} and {} are all named `r`/`R`; name the lacquer ratio `r` once and \
+             red `R` once",
+            a + 1,
+            b + 1,
+            c + 1
+        )),
     }
 }
 
@@ -371,14 +533,71 @@ mod tests {
             m.starts_with("wavelengths 400–700 nm do not cover 380–780 nm"),
             "{m}"
         );
-        let (_, m) = parse_error("sample,r,theta_i_deg,theta_o_deg,phi_deg,R,G,B,X\n");
-        assert!(m.starts_with("unknown column `X`"), "{m}");
         // Not a wavelength: it covered 380 nm and bent the resampling.
         let (_, m) = parse_error("sample,r,theta_i_deg,theta_o_deg,phi_deg,-380,580,780\n");
-        assert!(m.starts_with("unknown column `-380`"), "{m}");
+        assert!(m.starts_with("column `-380` is not a wavelength"), "{m}");
+        let (_, m) = parse_error("sample,r,theta_i_deg,theta_o_deg,phi_deg,R,G,B,380\n");
+        assert!(m.contains("R,G,B and the wavelength column `380`"), "{m}");
+        let (_, m) = parse_error("sample,r,theta_i_deg,,theta_o_deg,phi_deg,R,G,B\n");
+        assert!(m.starts_with("column 4 of the header has no name"), "{m}");
+        let (_, m) = parse_error("sample,r,theta_i_deg,theta_o_deg,phi_deg,red,green,blue\n");
+        assert!(
+            m.starts_with(
+                "missing the value columns: no R, G, B or wavelength column (the others are \
+                 `red`, `green`, `blue`)"
+            ),
+            "{m}"
+        );
+        let (_, m) = parse_error("sample|r|theta_i_deg|theta_o_deg|phi_deg|R|G|B\n");
+        assert!(
+            m.contains("is one column: separate the columns with"),
+            "{m}"
+        );
         let (line, m) = parse_error(HEADER);
         assert_eq!(line, 1);
         assert!(m.starts_with("the header has no data rows"), "{m}");
+    }
+
+    #[test]
+    fn unread_columns_are_noted_and_spectral_names_may_carry_nm() {
+        let text = "B,G,R,phi_deg,theta_o_deg,theta_i_deg,r,sample,operator\n\
+                    0.3,0.2,0.1,0,30,30,1,A,bob\n";
+        let data = parse_goniometer_csv(text, "t.csv").unwrap();
+        assert_eq!(data.rows[0].reflectance, [0.1, 0.2, 0.3]);
+        assert_eq!(
+            data.notes,
+            [
+                "t.csv:1: column(s) `operator` (column 9) are not read: the fit reads sample, r, \
+              theta_i_deg, theta_o_deg, phi_deg and R,G,B or wavelengths in nm"
+            ]
+        );
+        let text = "sample,r,theta_i_deg,theta_o_deg,phi_deg,380 nm,580nm,780.0\n\
+                    A,1,10,20,0,0.25,0.25,0.25\n";
+        let data = parse_goniometer_csv(text, "t.csv").unwrap();
+        assert!(data.notes.is_empty());
+        // Flat 0.25 is grey 0.25 (see spectral_rows_go_through_the_spectral_path).
+        assert!((data.rows[0].reflectance[1] - 0.25).abs() < 1e-15);
+    }
+
+    #[test]
+    fn upper_case_headers_tell_the_ratio_from_red() {
+        // Upper-cased, `r` and `R` are both `R`: the first is the ratio, as documented.
+        let text = "SAMPLE,R,THETA_I_DEG,THETA_O_DEG,PHI_DEG,R,G,B\nA,2,30,30,0,0.1,0.2,0.3\n";
+        let data = parse_goniometer_csv(text, "t.csv").unwrap();
+        assert_eq!(data.samples[0].lacquer_ratio, 2.0);
+        assert_eq!(data.rows[0].reflectance, [0.1, 0.2, 0.3]);
+        // Written `R` then `r`, case tells them apart whatever the order.
+        let text = "R,G,B,sample,r,theta_i_deg,theta_o_deg,phi_deg\n0.1,0.2,0.3,A,2,30,30,0\n";
+        let data = parse_goniometer_csv(text, "t.csv").unwrap();
+        assert_eq!(data.samples[0].lacquer_ratio, 2.0);
+        assert_eq!(data.rows[0].reflectance, [0.1, 0.2, 0.3]);
+        let (_, m) = parse_error("sample,theta_i_deg,theta_o_deg,phi_deg,R,G,B\n");
+        assert!(m.starts_with("missing column `r`"), "{m}");
+        let (_, m) = parse_error("sample,r,theta_i_deg,theta_o_deg,phi_deg,Theta_O_deg,R,G,B\n");
+        assert!(
+            m.starts_with("column `theta_o_deg` appears twice (columns 4 and 6)"),
+            "{m}"
+        );
     }
 
     #[test]

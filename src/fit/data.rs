@@ -38,6 +38,9 @@ pub struct Measurements {
     pub source: String,
     pub samples: Vec<Sample>,
     pub rows: Vec<Measurement>,
+    /// What reading did that a user should know (columns it did not read); the fit passes them
+    /// on as notes.
+    pub notes: Vec<String>,
 }
 
 /// The light direction of a goniometer row (see the module doc).

@@ -8,7 +8,7 @@
 //! from noisy values carry (low readings would count more). Owns the pipeline and the "too few
 //! data" checks; the maths is in [`super::separation`] and [`super::diffuse`].
 
-use super::data::{Measurement, Measurements};
+use super::data::{goniometer_angles, in_plane_theta_o, Measurement, Measurements};
 use super::diffuse::{
     check_lacquer_ratios, eval_law, fit_diffuse, DiffuseFit, DiffuseSums, Normalisation,
 };
@@ -96,8 +96,50 @@ impl FitResult {
     }
 }
 
-/// Fits the lacquer model to `data`.
+/// Fits the lacquer model to `data`. Where every angle is within π/2 degrees of the normal the
+/// angles were likely written in radians: a failure says so, and a fit that succeeds notes it.
 pub fn fit_measurements(data: &Measurements, options: &FitOptions) -> Result<FitResult> {
+    let radians = angles_look_like_radians(data);
+    match fit(data, options) {
+        Ok(mut fit) => {
+            if radians {
+                fit.notes.push(RADIANS_HINT.into());
+            }
+            Ok(fit)
+        }
+        Err(Error::InvalidParameter {
+            field,
+            value,
+            reason,
+        }) if radians => Err(Error::InvalidParameter {
+            field,
+            value,
+            reason: format!("{reason}. Hint: {RADIANS_HINT}"),
+        }),
+        Err(e) => Err(e),
+    }
+}
+
+const RADIANS_HINT: &str = "every θ_i and θ_o is within π/2 ≈ 1.5708 of 0, so the angles look \
+    like radians; the angle columns are in degrees (theta_i_deg, theta_o_deg, phi_deg): multiply \
+    them by 180/π ≈ 57.2958";
+
+/// Whether every row's light and viewer lie within π/2 *degrees* of the normal (and some not on
+/// it): no goniophotometer measures so, but θ in radians reads so as degrees.
+fn angles_look_like_radians(data: &Measurements) -> bool {
+    let limit = std::f64::consts::FRAC_PI_2.to_radians().cos();
+    let within = |v: glam::DVec3| v.z >= limit;
+    let on_normal = |v: glam::DVec3| v.x == 0.0 && v.y == 0.0;
+    !data.rows.is_empty()
+        && data.rows.iter().all(|r| within(r.light) && within(r.view))
+        && !data
+            .rows
+            .iter()
+            .all(|r| on_normal(r.light) && on_normal(r.view))
+}
+
+/// The fit itself.
+fn fit(data: &Measurements, options: &FitOptions) -> Result<FitResult> {
     let normalisation = normalisation(options.reference.as_ref())?;
     let limit = GRAZING_LIMIT_DEG.to_radians().cos();
     let selected: Vec<usize> = (0..data.rows.len())
@@ -152,7 +194,7 @@ pub fn fit_measurements(data: &Measurements, options: &FitOptions) -> Result<Fit
     }
     let diffuse = fit_diffuse(&sums, &ratios, &normalisation)?;
 
-    let mut notes = Vec::new();
+    let mut notes = data.notes.clone();
     let mut clamped = 0;
     let table: Vec<[f64; 3]> = solution
         .fresnel
@@ -237,6 +279,13 @@ fn check_enough_data(
     rows: &[Measurement],
     geometry: &[RowGeometry],
 ) -> Result<()> {
+    if data.rows.is_empty() {
+        return Err(Error::invalid(
+            "data",
+            "0 rows",
+            "there are no measurements to fit; give a file with measured rows",
+        ));
+    }
     if rows.is_empty() {
         return Err(Error::invalid(
             "data",
@@ -257,18 +306,17 @@ fn check_enough_data(
         ));
     }
     for (s, sample) in data.samples.iter().enumerate() {
-        let mut views: Vec<f64> = rows
+        // (N·V to 1e-9, the first such row): f depends on N·V alone.
+        let mut views: Vec<(f64, &Measurement)> = rows
             .iter()
             .zip(geometry)
             .filter(|(r, _)| r.sample == s)
-            .map(|(_, g)| (g.nv * 1e9).round() / 1e9)
+            .map(|(r, g)| ((g.nv * 1e9).round() / 1e9, r))
             .collect();
-        views.sort_by(f64::total_cmp);
-        views.dedup();
+        views.sort_by(|a, b| a.0.total_cmp(&b.0));
+        views.dedup_by(|a, b| a.0 == b.0);
         if views.len() < 2 {
-            let angles = views
-                .iter()
-                .map(|nv| format!("{:.1}°", nv.acos().to_degrees()));
+            let angles = views.iter().map(|(_, row)| shown_view_angle(row));
             return Err(Error::invalid(
                 format!("data for f(N·V) of sample `{}`", sample.name),
                 format!(
@@ -308,6 +356,18 @@ fn check_enough_data(
         ));
     }
     Ok(())
+}
+
+/// A row's viewing angle as the file gives it: signed in the plane of incidence (θ_o = −85 is on
+/// the light's side, and was shown as 85.0°), with its azimuth out of it.
+fn shown_view_angle(row: &Measurement) -> String {
+    match in_plane_theta_o(row.light, row.view, 1e-6) {
+        Some(theta_o) => format!("{theta_o:.1}°"),
+        None => {
+            let (_, theta_o, phi) = goniometer_angles(row.light, row.view);
+            format!("{theta_o:.1}° at φ = {phi:.1}°")
+        }
+    }
 }
 
 /// Per channel: 1e-3 of the median value. Weights 1/max(value, floor)² so that a zero reading

@@ -139,6 +139,22 @@ pub fn parse_merl(bytes: &[u8], source: &str, phi_d_stride: usize) -> Result<Mea
             }
         }
     }
+    if rows.is_empty() {
+        return Err(Error::invalid(
+            format!("MERL file {source}"),
+            "no measured entry",
+            format!(
+                "none of the {} entries read ({}, above the horizon) holds a measured value: \
+                 each is negative (MERL's \"not measured\"), NaN or infinite; check that this is \
+                 the BRDF you meant to fit",
+                MERL_ENTRIES / phi_d_stride.max(1),
+                match phi_d_stride {
+                    0 | 1 => "every φ_d bin".to_string(),
+                    n => format!("every {n}th φ_d bin"),
+                }
+            ),
+        ));
+    }
     Ok(Measurements {
         source: source.to_string(),
         samples: vec![Sample {
@@ -146,6 +162,7 @@ pub fn parse_merl(bytes: &[u8], source: &str, phi_d_stride: usize) -> Result<Mea
             lacquer_ratio: 1.0,
         }],
         rows,
+        notes: Vec::new(),
     })
 }
 
@@ -238,6 +255,22 @@ mod tests {
         let h = (l + v).normalize();
         let expected = (22.5f64).to_radians();
         assert!((h.z.acos() - expected).abs() < 1e-12 && h.y.abs() < 1e-12);
+    }
+
+    /// A file whose every entry is "not measured" said `0 rows, all grazing … within 87°`.
+    #[test]
+    fn a_file_with_no_measured_entry_says_so() {
+        let bytes = merl_bytes(|_, _| [-1.0; 3]);
+        let err = parse_merl(&bytes, "x.binary", MERL_PHI_D_STRIDE)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with(
+                "invalid MERL file x.binary = no measured entry: none of the 145800 entries read \
+                 (every 10th φ_d bin, above the horizon) holds a measured value"
+            ),
+            "{err}"
+        );
     }
 
     #[test]

@@ -88,6 +88,7 @@ pub fn synthesize(
         source: "synthetic".into(),
         samples: Vec::new(),
         rows: Vec::with_capacity(grid.len() * ratios.len()),
+        notes: Vec::new(),
     };
     let mut angles = Vec::with_capacity(grid.len() * ratios.len());
     for (s, &r) in ratios.iter().enumerate() {

@@ -43,7 +43,7 @@ fn missing_columns() {
     // A row with a cell missing.
     assert_eq!(
         csv_error("A,1,30,30,0,0.1,0.2,0.3\nA,1,30,31,0,0.1,0.2\n"),
-        "data.csv:3: expected 8 comma-separated cells as in the header, found 7"
+        "data.csv:3: expected 8 cells separated by `,` as in the header, found 7"
     );
 }
 

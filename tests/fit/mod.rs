@@ -1,4 +1,5 @@
 mod cli;
 mod errors;
+mod formats;
 mod recovery;
 mod render;
