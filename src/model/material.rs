@@ -209,8 +209,8 @@ impl LacquerMaterial {
                 self.ior_b = ior_b;
             }
             ("fresnel", Path(path)) => self.fresnel_file = path,
-            ("beta_normal", Number(x)) => self.beta_normal = checked_positive(key, x)?,
-            ("beta_grazing", Number(x)) => self.beta_grazing = checked_positive(key, x)?,
+            ("beta_normal", Number(x)) => self.beta_normal = checked_blur(key, x)?,
+            ("beta_grazing", Number(x)) => self.beta_grazing = checked_blur(key, x)?,
             ("beta_power", Number(x)) => self.beta_power = checked_positive(key, x)?,
             (_, value) => {
                 let wanted = match key {
@@ -240,8 +240,8 @@ impl LacquerMaterial {
         checked_albedo(self.albedo)?;
         self.check_lacquer_ratio()?;
         check_ior(self.ior_a, self.ior_b)?;
-        checked_positive("beta_normal", self.beta_normal)?;
-        checked_positive("beta_grazing", self.beta_grazing)?;
+        checked_blur("beta_normal", self.beta_normal)?;
+        checked_blur("beta_grazing", self.beta_grazing)?;
         checked_positive("beta_power", self.beta_power)?;
         Ok(())
     }
@@ -437,6 +437,21 @@ fn checked_albedo(kd: [f64; 3]) -> Result<[f64; 3]> {
     }
 }
 
+/// A blur width β of SPEC §4: finite and ≥ 0. β = 0 is the sharp layer 0 (SPEC's β_0), which
+/// both the shader and the CPU twin read as layer 0 alone; an audit found 0 refused, 2026-12-06.
+fn checked_blur(key: &str, v: f64) -> Result<f64> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(Error::invalid(
+            key,
+            v,
+            "must be a finite blur width ≥ 0 (0: the sharp environment, SPEC §4's β_0; the \
+             presets use 0.05 to 0.6)",
+        ))
+    }
+}
+
 fn checked_positive(key: &str, v: f64) -> Result<f64> {
     if v.is_finite() && v > 0.0 {
         Ok(v)
@@ -568,8 +583,8 @@ mod tests {
                 "r", "g(r) ="),
             (|m| m.ior_a = 0.99, "ior_a", ">= 1"),
             (|m| m.ior_b = -0.001, "ior_b", ">= 0"),
-            (|m| m.beta_normal = 0.0, "beta_normal", "> 0"),
-            (|m| m.beta_grazing = f64::INFINITY, "beta_grazing", "> 0"),
+            (|m| m.beta_normal = -0.01, "beta_normal", "≥ 0"),
+            (|m| m.beta_grazing = f64::INFINITY, "beta_grazing", "≥ 0"),
             (|m| m.beta_power = -1.0, "beta_power", "> 0"),
         ];
         for (edit, field, needle) in cases {

@@ -196,6 +196,36 @@ fn a_mesh_files_load_notes_are_a_warning_once() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// β = 0 (SPEC §4's β_0, the sharp map) is a valid blur: an audit found `beta_normal = 0`
+/// refused. It renders as the limit of small β: against β = 1e-9 (t = 5e-8 of the way to layer
+/// 1, so within 1e-6 of layer 0 in any pixel whose layers differ by less than 20×) every pixel
+/// agrees to 1e-5 relative, and none is NaN.
+#[test]
+fn a_blur_of_zero_reads_the_sharp_environment() {
+    let gpu = validated_gpu();
+    let mut renderer = SceneRenderer::with_disk_cache(None);
+    let mut render = |beta: f64| {
+        let mut scene = small_scene(EnvironmentSpec::named("builtin:studio".to_string()));
+        scene.lights.clear();
+        for object in &mut scene.objects {
+            object.material.beta_normal = beta;
+            object.material.beta_grazing = beta;
+        }
+        renderer.render(&gpu, &scene).unwrap()
+    };
+    let (zero, tiny) = (render(0.0), render(1e-9));
+    for (a, b) in zero.pixels.iter().zip(&tiny.pixels) {
+        for c in 0..4 {
+            assert!(a[c].is_finite(), "{a:?}");
+            assert!(
+                (a[c] - b[c]).abs() <= 1e-5 * b[c].abs().max(1e-3),
+                "{a:?} against {b:?}"
+            );
+        }
+    }
+    assert_no_validation_messages(&gpu);
+}
+
 /// Every numeric key, set from a scene file's number, holds exactly that number — including
 /// values whose shortest decimal form has 17 digits.
 #[test]
