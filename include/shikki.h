@@ -237,10 +237,10 @@ enum ShikkiStatus shikki_material_set_ior_a(struct ShikkiMaterial material, doub
 // B of n(λ) = A + B/λ², in µm², in [0, 1] (real lacquers ≤ 0.02).
 enum ShikkiStatus shikki_material_set_ior_b(struct ShikkiMaterial material, double value);
 
-// β of the environment blur at normal view (> 0).
+// β of the environment blur at normal view (≥ 0; 0 is the sharp map).
 enum ShikkiStatus shikki_material_set_beta_normal(struct ShikkiMaterial material, double value);
 
-// β of the environment blur at grazing view (> 0).
+// β of the environment blur at grazing view (≥ 0; 0 is the sharp map).
 enum ShikkiStatus shikki_material_set_beta_grazing(struct ShikkiMaterial material, double value);
 
 // p of β(nv) = β_grazing + (β_normal − β_grazing)·nv^p (> 0).

@@ -167,7 +167,7 @@ pub extern "C" fn shikki_material_set_ior_b(material: ShikkiMaterial, value: f64
     ffi_boundary!({ set_value(material, "ior_b", MaterialValue::Number(value)) })
 }
 
-/// β of the environment blur at normal view (> 0).
+/// β of the environment blur at normal view (≥ 0; 0 is the sharp map).
 #[no_mangle]
 pub extern "C" fn shikki_material_set_beta_normal(
     material: ShikkiMaterial,
@@ -176,7 +176,7 @@ pub extern "C" fn shikki_material_set_beta_normal(
     ffi_boundary!({ set_value(material, "beta_normal", MaterialValue::Number(value)) })
 }
 
-/// β of the environment blur at grazing view (> 0).
+/// β of the environment blur at grazing view (≥ 0; 0 is the sharp map).
 #[no_mangle]
 pub extern "C" fn shikki_material_set_beta_grazing(
     material: ShikkiMaterial,
