@@ -308,10 +308,11 @@ fn brdf(args: BrdfArgs) -> Result<()> {
     let material = build_material(&args.material)?;
     let params = material.brdf_params()?;
     let fresnel = material.fresnel_table()?;
-    let text = std::fs::read_to_string(&args.input).map_err(|source| Error::Read {
-        path: args.input.clone(),
-        source,
-    })?;
+    let text = crate::text::read_text_file(
+        &args.input,
+        directions::MAX_DIRECTIONS_CSV_BYTES,
+        "directions CSV",
+    )?;
     let rows = directions::parse_directions(&text, &args.input.display().to_string())?;
     let values: Vec<[f64; 3]> = match args.backend {
         Backend::Cpu => rows

@@ -11,8 +11,8 @@ pub const HEADER: &str = "nx,ny,nz,vx,vy,vz,lx,ly,lz";
 pub const MAX_DIRECTION_ROWS: usize = 1_000_000;
 
 /// The largest input (256 MiB): a row of nine full-precision numbers is under 230 bytes, so
-/// this holds [`MAX_DIRECTION_ROWS`] rows of any spelling. (The caller reads the file whole;
-/// refusing it from its length before reading is `text::read_text_file`'s, with this limit.)
+/// this holds [`MAX_DIRECTION_ROWS`] rows of any spelling. `shikki brdf` refuses a longer file
+/// from its length, before reading it (`text::read_text_file`).
 pub const MAX_DIRECTIONS_CSV_BYTES: u64 = 256 << 20;
 
 /// Parses the CSV text; every error names the line. Vectors are normalised here. Text above
