@@ -7,8 +7,8 @@
 //!
 //! Why a journal and not a file rewritten after every job: a rewrite costs the whole file, so a
 //! run of n jobs wrote O(n²) bytes and fsynced n times; past a few thousand jobs the writer fell
-//! behind the renderer and the run slowed as it went (BENCHMARKS.md, "The batch's manifest and
-//! contact sheet at scale"). Appending costs one row; the file is fsynced at most every
+//! behind the renderer and the run slowed as it went (BENCHMARKS.md, "The batch at scale").
+//! Appending costs one row; the file is fsynced at most every
 //! [`MANIFEST_SYNC_INTERVAL`] and at the end. The first write of a run still replaces the previous
 //! run's manifest atomically (temporary file, fsync, rename), so a run killed before its first job
 //! finished leaves the old manifest whole.
@@ -264,8 +264,9 @@ impl ManifestWriter {
 }
 
 /// The jobs earlier runs finished: (id, scene hash) of every `ok` row of every `manifest*.csv` in
-/// the output directory (this run's or any shard's). 40 bytes a row, where the rows themselves
-/// were hundreds: a resumed million-job run holds tens of megabytes, not gigabytes.
+/// the output directory (this run's or any shard's). About 50 bytes a row (40 and the table's
+/// own), where the rows themselves were hundreds: a resumed million-job run holds tens of
+/// megabytes, not gigabytes.
 #[derive(Debug, Default)]
 pub struct Finished(HashSet<(usize, [u8; 32])>);
 

@@ -4,7 +4,8 @@
 //! Owns the naming rule, which must never merge two values (issue 14: `-30` and `30` both became
 //! `30`, and ten images of the example sweep overwrote ten others):
 //!
-//! 1. A value's text (as the manifest shows it) keeps ASCII letters, digits, `.`, `_` and `-`;
+//! 1. A value's text (as the manifest shows it; inside an array the manifest also quotes
+//!    strings) keeps ASCII letters, digits, `.`, `_` and `-`;
 //!    every other character becomes `%XX` for each byte of its UTF-8 encoding, `%` itself
 //!    included ([`escape_value`]). Decoding the escapes gives the text back, so two values with
 //!    different texts never share a name: `-30` → `-30`, `1.5` → `1.5`, `builtin:bowl` →

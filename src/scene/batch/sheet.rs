@@ -7,10 +7,10 @@
 //! The sheet is bounded whatever the batch: at most [`MAX_SHEET_TILES`] tiles (beyond that, one
 //! job in every `stride`, evenly through the run, with a line saying so: the manifest lists every
 //! job) and labels of at most [`MAX_LABEL_VALUES`] values, each cut to the tile's width. A sheet
-//! of every tile grew with the batch: 6,000 jobs made a 0.9-gigapixel buffer, and past ~30,000
-//! its byte count wrapped in `u32` and plotters panicked. Its buffer is allocated once, at most
-//! 3,208 × 5,279 pixels; each tile is painted into it as its job finishes and then dropped, so
-//! only the tiles waiting for the writer are held.
+//! of every tile grew with the batch, held every tile until the end, and once its byte count
+//! wrapped `u32` plotters panicked (BENCHMARKS.md, "The batch at scale"). Its buffer is allocated
+//! once, at most 3,208 × 5,279 pixels; each tile is painted into it as its job finishes and then
+//! dropped, so only the tiles waiting for the writer are held.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::OnceLock;
