@@ -91,10 +91,12 @@ impl InFlight {
         self.freed.notify_all();
     }
 
-    fn encoder_gone(&self) {
+    /// One encoder ended; returns how many are left.
+    fn encoder_gone(&self) -> usize {
         let mut state = self.state.lock().unwrap_or_else(|p| p.into_inner());
         state.1 = state.1.saturating_sub(1);
         self.freed.notify_all();
+        state.1
     }
 }
 
@@ -148,13 +150,23 @@ impl Drop for Writing<'_> {
 }
 
 /// Tells [`InFlight`] that its encoder is gone, however it ends (a panic too).
-struct Running<'a>(&'a InFlight);
+/// The last one also drops the render thread's receiver, so that its next send fails instead of
+/// waiting for ever once the queue is full (the writer panicked, or every encoder did).
+struct Running<'a> {
+    in_flight: &'a InFlight,
+    jobs: &'a Jobs,
+}
 
 impl Drop for Running<'_> {
     fn drop(&mut self) {
-        self.0.encoder_gone();
+        if self.in_flight.encoder_gone() == 0 {
+            *self.jobs.lock().unwrap_or_else(|p| p.into_inner()) = None;
+        }
     }
 }
+
+/// The render thread's queue as the encoders share it; `None` once the last encoder is gone.
+pub(super) type Jobs = Mutex<Option<mpsc::Receiver<(usize, Message)>>>;
 
 /// The bytes a message holds while it waits for an encoder.
 pub(super) fn message_bytes(message: &Message) -> u64 {
@@ -168,15 +180,18 @@ pub(super) fn message_bytes(message: &Message) -> u64 {
 /// (with the job's place in the run) to the writer; ends when the render thread is done or the
 /// writer is gone.
 pub(super) fn encode_loop(
-    jobs: &Mutex<mpsc::Receiver<(usize, Message)>>,
+    jobs: &Jobs,
     done: mpsc::Sender<(usize, Written)>,
     in_flight: &InFlight,
     sink: &dyn OutputSink,
 ) {
-    let _running = Running(in_flight);
+    let _running = Running { in_flight, jobs };
     loop {
-        let next = jobs.lock().unwrap_or_else(|p| p.into_inner()).recv();
-        let Ok((place, message)) = next else { return };
+        let next = match jobs.lock().unwrap_or_else(|p| p.into_inner()).as_ref() {
+            Some(receiver) => receiver.recv().ok(),
+            None => None,
+        };
+        let Some((place, message)) = next else { return };
         let bytes = message_bytes(&message);
         let written = match message {
             Message::Render {

@@ -171,7 +171,7 @@ pub fn run_batch(
 
     let (sender, receiver) = mpsc::sync_channel::<(usize, Message)>(WRITER_QUEUE);
     let (done, written) = mpsc::channel();
-    let receiver = Mutex::new(receiver);
+    let receiver = Mutex::new(Some(receiver));
     let encoder_count = options.encoders.max(1);
     let in_flight = InFlight::new(encoder_count);
     let unwritten = Unwritten::new();
@@ -214,7 +214,7 @@ pub fn run_batch(
             unwritten.acquire();
             in_flight.acquire(message_bytes(&message));
             if sender.send((place, message)).is_err() {
-                break; // The encoders stopped: the writer's error is returned below.
+                break; // The encoders are gone: the writer's error is returned below.
             }
         }
         drop(sender);

@@ -404,3 +404,48 @@ fn prefilter_render_and_batch_in_one_process_are_silent_under_sync_validation() 
     let at_shutdown = log.take();
     assert!(at_shutdown.is_empty(), "{}", at_shutdown.join("\n"));
 }
+
+/// Panics when the manifest is written: the writer thread dies at the first row.
+#[derive(Debug)]
+struct PanickingManifest;
+
+impl OutputSink for PanickingManifest {
+    fn write_bytes(&self, target: &Path, file: &mut File, bytes: &[u8]) -> io::Result<()> {
+        assert!(!target.ends_with("manifest.csv"), "a sink that panics");
+        file.write_all(bytes)
+    }
+}
+
+/// A writer that panics (here in a library user's sink) fails the run with an error naming it.
+/// The render thread used to wait for ever: the encoders stopped when the writer went, but the
+/// queue they read from stayed open and filled up.
+#[test]
+fn a_panicking_writer_fails_the_batch_instead_of_hanging() {
+    let (result, finished) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let dir = tempfile::tempdir().unwrap();
+        // 2 × 100 jobs that fail when prepared (r = 7 is outside [1, 5.63]): more than the queues
+        // hold, so the render thread must see that the encoders are gone.
+        let sevens = format!("[{}]", ["7"; 100].join(", "));
+        let plan = BatchPlan::parse(
+            &SMALL_JOBS.replace("[1, 2, 3]", &sevens),
+            "jobs.toml",
+            dir.path(),
+        )
+        .unwrap();
+        let gpu = validated_gpu();
+        let mut options = BatchOptions::new(dir.path().join("out"));
+        options.sink = Arc::new(PanickingManifest);
+        let _ = result.send(run_batch(&gpu, &plan, &options).map_err(|e| e.to_string()));
+    });
+    // Failing jobs finish in milliseconds; the margin is for a loaded CI machine.
+    let outcome = match finished.recv_timeout(Duration::from_secs(60)) {
+        Ok(outcome) => outcome,
+        Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+            panic!("the batch hung after its writer panicked")
+        }
+        Err(e) => panic!("the test's thread failed before run_batch returned ({e})"),
+    };
+    let message = outcome.unwrap_err();
+    assert!(message.contains("writer thread"), "{message}");
+}
