@@ -21,6 +21,7 @@
 //! they run, resume keeps a hash per finished job ([`manifest::Finished`]), manifest rows go to
 //! the file as they finish and the contact sheet is bounded ([`super::sheet`]).
 
+use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc, Mutex};
@@ -184,6 +185,7 @@ pub fn run_batch(
     };
     let sink: &dyn OutputSink = options.sink.as_ref();
     let mut started = 0;
+    let mut render_panicked = false;
     let result = std::thread::scope(|scope| {
         let encoders: Vec<_> = (0..encoder_count)
             .map(|_| {
@@ -201,15 +203,24 @@ pub fn run_batch(
             }
             let place = started;
             started += 1;
-            let job = plan.job(id);
-            let tile = layout.shows(place);
-            let message = render_job(gpu, &mut renderer, plan, &job, options, &previous, tile);
-            for warning in renderer.take_warnings() {
-                observer.line(&format!("warning: {warning}"));
-            }
-            if let Message::Failed { row } = &message {
-                observer.line(&format!("error: job {}: {}", row.job, row.status));
-            }
+            // A panic here (a bug, or a library user's observer) ends the run with an error once
+            // the jobs before it are written, rather than unwinding through the caller.
+            let step = catch_unwind(AssertUnwindSafe(|| {
+                let job = plan.job(id);
+                let tile = layout.shows(place);
+                let message = render_job(gpu, &mut renderer, plan, &job, options, &previous, tile);
+                for warning in renderer.take_warnings() {
+                    observer.line(&format!("warning: {warning}"));
+                }
+                if let Message::Failed { row } = &message {
+                    observer.line(&format!("error: job {}: {}", row.job, row.status));
+                }
+                message
+            }));
+            let Ok(message) = step else {
+                render_panicked = true;
+                break;
+            };
             // Bounded in count (failed jobs carry no image) and in image bytes.
             unwritten.acquire();
             in_flight.acquire(message_bytes(&message));
@@ -228,6 +239,13 @@ pub fn run_batch(
     let (manifest_path, sheet, counts) = result?;
     let sheet_path = options.out_dir.join(sheet_name);
     sink::write_file(sink, &sheet_path, &sheet.finish()?)?;
+    if render_panicked {
+        return Err(Error::invalid(
+            "batch",
+            "render thread",
+            "panicked; please report (the manifest lists the jobs before it)",
+        ));
+    }
     Ok(BatchSummary {
         rendered: counts.rendered,
         skipped: counts.skipped,

@@ -449,3 +449,36 @@ fn a_panicking_writer_fails_the_batch_instead_of_hanging() {
     let message = outcome.unwrap_err();
     assert!(message.contains("writer thread"), "{message}");
 }
+
+/// Panics at the first failed job's error line, which the render thread reports.
+#[derive(Debug)]
+struct PanickingObserver;
+
+impl shikki::scene::batch::BatchObserver for PanickingObserver {
+    fn line(&self, text: &str) {
+        assert!(!text.starts_with("error: job"), "an observer that panics");
+    }
+}
+
+/// A panic on the render thread (here in a library user's observer) is the run's error, after
+/// the jobs before it are written; it used to unwind through `run_batch` into the caller.
+#[test]
+fn a_panic_on_the_render_thread_is_an_error_not_an_unwind() {
+    let dir = tempfile::tempdir().unwrap();
+    // Job 2 (smooth-red, r = 7) fails when prepared; jobs 0 and 1 render first.
+    let plan = BatchPlan::parse(
+        &SMALL_JOBS.replace("[1, 2, 3]", "[1, 2, 7]"),
+        "jobs.toml",
+        dir.path(),
+    )
+    .unwrap();
+    let gpu = validated_gpu();
+    let out_dir = dir.path().join("out");
+    let mut options = BatchOptions::new(&out_dir);
+    options.observer = Arc::new(PanickingObserver);
+    let message = run_batch(&gpu, &plan, &options).unwrap_err().to_string();
+    assert!(message.contains("render thread"), "{message}");
+    assert_no_validation_messages(&gpu);
+    let rows = assert_consistent(&out_dir);
+    assert_eq!(rows.iter().map(|r| r.job).collect::<Vec<_>>(), [0, 1]);
+}
