@@ -5,7 +5,8 @@ use crate::common;
 use common::{assert_no_validation_messages, validated_gpu, Rng};
 use glam::DVec3;
 use shikki::compute::BrdfEvaluator;
-use shikki::model::{lacquer_brdf, LacquerMaterial, PRESET_NAMES};
+use shikki::gpu::GpuContext;
+use shikki::model::{lacquer_brdf, BrdfParams, FresnelTable, LacquerMaterial, PRESET_NAMES};
 
 /// A unit vector at angle acos(cos_theta) from `n`, at a random azimuth.
 fn around(n: DVec3, cos_theta: f64, rng: &mut Rng) -> DVec3 {
@@ -53,18 +54,27 @@ fn direction_triples(count: usize, seed: u64) -> Vec<[DVec3; 3]> {
         .collect()
 }
 
+/// The preset's parameters and table, and f_r of each triple on the GPU.
+fn evaluate_preset(
+    gpu: &GpuContext,
+    evaluator: &BrdfEvaluator,
+    preset: &str,
+    triples: &[[DVec3; 3]],
+) -> (BrdfParams, FresnelTable, Vec<[f32; 3]>) {
+    let material = LacquerMaterial::preset(preset).unwrap();
+    let params = material.brdf_params().unwrap();
+    let fresnel = material.fresnel_table().unwrap();
+    let values = evaluator.evaluate(gpu, &params, &fresnel, triples).unwrap();
+    (params, fresnel, values)
+}
+
 #[test]
 fn gpu_brdf_matches_cpu_model_for_every_preset() {
     let gpu = validated_gpu();
     let evaluator = BrdfEvaluator::new(&gpu).unwrap();
     let triples = direction_triples(12_000, 0x5eed_1ac9);
     for preset in PRESET_NAMES {
-        let material = LacquerMaterial::preset(preset).unwrap();
-        let params = material.brdf_params().unwrap();
-        let fresnel = material.fresnel_table().unwrap();
-        let gpu_values = evaluator
-            .evaluate(&gpu, &params, &fresnel, &triples)
-            .unwrap();
+        let (params, fresnel, gpu_values) = evaluate_preset(&gpu, &evaluator, preset, &triples);
         assert_eq!(gpu_values.len(), triples.len());
         let mut compared = 0usize;
         let mut worst = (0.0f64, 0usize);
@@ -128,12 +138,7 @@ fn gpu_brdf_is_finite_where_the_cosines_underflow() {
         })
         .collect();
     for preset in PRESET_NAMES {
-        let material = LacquerMaterial::preset(preset).unwrap();
-        let params = material.brdf_params().unwrap();
-        let fresnel = material.fresnel_table().unwrap();
-        let gpu_values = evaluator
-            .evaluate(&gpu, &params, &fresnel, &triples)
-            .unwrap();
+        let (params, fresnel, gpu_values) = evaluate_preset(&gpu, &evaluator, preset, &triples);
         for (i, (triple, got)) in triples.iter().zip(&gpu_values).enumerate() {
             let [n, v, l] = triple.map(|d| d.normalize().as_vec3().as_dvec3());
             let want = lacquer_brdf(&params, &fresnel, n, v, l);

@@ -13,19 +13,16 @@
 //! dropped, so only the tiles waiting for the writer are held.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::sync::OnceLock;
 
 use plotters::backend::RGBPixel;
 use plotters::prelude::*;
-use plotters::style::{register_font, FontStyle};
 
 use super::manifest::{ManifestRow, STATUS_OK};
+use crate::output::text::FONT_FAMILY;
 use crate::output::tonemap::Srgb8Encoder;
 use crate::output::{HdrImage, PngSettings};
 use crate::{Error, Result};
 
-const FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
-const FONT_FAMILY: &str = "shikki-sheet";
 /// The longest side of a tile's image, in pixels.
 pub const TILE: u32 = 192;
 const LINE_HEIGHT: u32 = 15;
@@ -373,15 +370,10 @@ fn failed(message: String) -> Error {
     }
 }
 
+/// The embedded font, registered once for every plot and sheet (`output::text`), its error
+/// named as the sheet's.
 fn ensure_font() -> Result<()> {
-    static REGISTERED: OnceLock<std::result::Result<(), String>> = OnceLock::new();
-    REGISTERED
-        .get_or_init(|| {
-            register_font(FONT_FAMILY, FontStyle::Normal, FONT)
-                .map_err(|_| "the embedded DejaVu Sans font did not parse".to_string())
-        })
-        .clone()
-        .map_err(failed)
+    crate::output::text::ensure_font().map_err(|e| failed(e.to_string()))
 }
 
 #[cfg(test)]
