@@ -17,6 +17,7 @@ use shikki::model::LacquerMaterial;
 use shikki::scene::batch::BatchPlan;
 use shikki::scene::parse::MAX_SCENE_FILE_BYTES;
 use shikki::scene::{load_scene_file, parse_scene_str, SceneDocument};
+use shikki::Error;
 use support::*;
 
 const HEADER_ONLY: Duration = Duration::from_secs(2);
@@ -78,7 +79,7 @@ fn scene_nan_inf_and_negative_values_name_the_key() {
         (
             "[camera]\neye = [0, inf, 1]\n",
             2,
-            vec!["`eye` must be an array of three numbers"],
+            vec!["`eye` must be three finite numbers", "inf"],
         ),
         (
             "[[object]]\nmesh = \"builtin:bowl\"\nscale = -1\n",
@@ -462,17 +463,26 @@ fn material_file_errors_name_line_key_and_valid_values() {
             1,
             "did you mean `beta_normal`?",
         ),
-        (
-            "fresnel.toml",
-            "fresnel = \"missing.csv\"\n",
-            1,
-            "missing.csv",
-        ),
         ("binary.toml", "m = 0.1\n\u{0}\n", 2, "column"),
     ] {
         let path = ws.file(name, text);
         let message = expect_parse(load_material_file(&path), name, line);
         assert_names(&message, &[fragment]);
+    }
+    // A table that cannot be read is a read failure at the line that names it, not a parse
+    // error (the C API's IO_ERROR).
+    let path = ws.file("fresnel.toml", "fresnel = \"missing.csv\"\n");
+    match load_material_file(&path) {
+        Err(Error::ReadNamedAt {
+            file,
+            line,
+            message,
+            ..
+        }) => {
+            assert!(file.ends_with("fresnel.toml") && line == 1, "{file}:{line}");
+            assert_names(&message, &["column 11", "cannot read", "missing.csv"]);
+        }
+        other => panic!("expected a read failure at fresnel.toml:1, got {other:?}"),
     }
     let path = ws.file("latin1.toml", b"m = 0.1\n# caf\xe9\n");
     let message = expect_parse(load_material_file(&path), "latin1.toml", 2);
