@@ -153,15 +153,7 @@ impl Value {
 
 /// Parses TOML `text` into a located tree; a syntax error names `source:line` and the column.
 pub fn parse_document(text: &str, source: &str, base_dir: &Path) -> Result<Node> {
-    let located = Locator {
-        text,
-        source: Arc::from(source),
-        base_dir: Arc::from(base_dir),
-        line_starts: std::iter::once(0)
-            .chain(text.match_indices('\n').map(|(i, _)| i + 1))
-            .collect(),
-        last: Cell::new((0, 1)),
-    };
+    let located = Locator::new(text, source, base_dir);
     let table = DeTable::parse(text).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
         let message = e.message().trim_end();
@@ -197,7 +189,19 @@ struct Locator<'a> {
     last: Cell<(usize, usize)>,
 }
 
-impl Locator<'_> {
+impl<'a> Locator<'a> {
+    fn new(text: &'a str, source: &str, base_dir: &Path) -> Self {
+        Locator {
+            text,
+            source: Arc::from(source),
+            base_dir: Arc::from(base_dir),
+            line_starts: std::iter::once(0)
+                .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+                .collect(),
+            last: Cell::new((0, 1)),
+        }
+    }
+
     fn origin(&self, span: Range<usize>) -> Origin {
         let offset = span.start.min(self.text.len());
         let line = self.line_starts.partition_point(|&start| start <= offset);
@@ -514,15 +518,7 @@ mod tests {
     #[test]
     fn spans_are_located_as_by_counting_from_the_start() {
         let text = "a = 1\nb = [\"東京\", 2, 3]\n\n  c = \"é\" # x\nd=4";
-        let locator = Locator {
-            text,
-            source: Arc::from("t"),
-            base_dir: Arc::from(Path::new(".")),
-            line_starts: std::iter::once(0)
-                .chain(text.match_indices('\n').map(|(i, _)| i + 1))
-                .collect(),
-            last: Cell::new((0, 1)),
-        };
+        let locator = Locator::new(text, "t", Path::new("."));
         let counted = |offset: usize| {
             let before = &text[..offset];
             let line_start = before.rfind('\n').map_or(0, |i| i + 1);
