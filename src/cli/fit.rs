@@ -235,8 +235,9 @@ fn refuse_overwriting_inputs(outputs: &[Output], inputs: &[PathBuf]) -> Result<(
 }
 
 /// Whether two paths name one existing file: the same device and inode on Unix, so hard links,
-/// symbolic links and `./x` against `x` all count; the canonical paths elsewhere.
-fn same_file(a: &Path, b: &Path) -> bool {
+/// symbolic links and `./x` against `x` all count; the canonical paths elsewhere. Also the
+/// render's rule for its output against its inputs (`scene_cmd`).
+pub(super) fn same_file(a: &Path, b: &Path) -> bool {
     let (Ok(meta_a), Ok(meta_b)) = (std::fs::metadata(a), std::fs::metadata(b)) else {
         return false;
     };

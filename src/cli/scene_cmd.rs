@@ -10,6 +10,7 @@ use std::sync::Arc;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::args::{BatchArgs, RenderArgs};
+use super::fit::same_file;
 use crate::environment::load;
 use crate::environment::EnvironmentSource;
 use crate::output::{self, OutputFormat, PngSettings};
@@ -152,14 +153,6 @@ fn map_file(scene: &Scene) -> Option<PathBuf> {
             ..
         } => load::environment_file(name).map(Path::to_path_buf),
         _ => None,
-    }
-}
-
-/// Whether `a` and `b` name one existing file (through links, `..` or another spelling).
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => false,
     }
 }
 
