@@ -63,7 +63,7 @@ void layer_pair(float beta, out int k0, out float t) {
     }
 }
 
-// The `brdf` model's layer pair for a lookup at β (up to 1,024 a pixel, where `layer_pair`'s
+// The `brdf` model's layer pair for a lookup at β (up to 2,048 a pixel, where `layer_pair`'s
 // run over the layers was a quarter of the time): from layer 1 the layers' β are a geometric run
 // (frame.layer_run; the `brdf` model's fine layers continue it below β_min), so the pair is where
 // ln β falls on it. At a boundary rounding may give the neighbouring pair with t at 1 or 0

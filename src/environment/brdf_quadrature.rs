@@ -31,9 +31,13 @@ use crate::model::{BrdfParams, FresnelTable};
 /// measured in BENCHMARKS.md ("The `brdf` environment model"). At 32 a rough sphere under a
 /// studio map was 6 % off in its inner part; at 128, 2.3 %. At 128 the courtyard's 112 points
 /// were still 2.5 % off on average at m = 0.5 (p99 18 %), at 512 1.0 % (5.7 %), at 1,024 0.46 %
-/// (3.9 %): the lookups' blur widens the lobe by a share that falls as 1/samples. Only the
-/// materials above `FIS_M_LO` pay for it (the presets use the lattice and the grid).
-pub const BRDF_SAMPLES: u32 = 1024;
+/// (3.9 %), at 2,048 0.23 % (1.2 %): the lookups' blur widens the lobe by a share that falls as
+/// 1/samples. 1,024 left the top of a sphere in perspective, which reflects the courtyard's dark
+/// zenith with bright walls in the lobe's tails, +10 % off (p99 5.1 % on a 32² view; 2.7 % at
+/// 2,048, 1.4 % at 4,096) for 1.8× the draw's time (a 512² m = 0.5 sphere on lavapipe, whole
+/// process, 2.45 → 4.5 s). Only the materials above `FIS_M_LO` pay for it (the presets use the
+/// lattice and the grid).
+pub const BRDF_SAMPLES: u32 = 2048;
 
 /// Lobe samples at the hits of the light between objects' paths (`ENV_HIT_SAMPLES`): every
 /// ray pays them, and the paths' own noise is larger than the quadrature's error at 32.
@@ -277,9 +281,17 @@ pub struct GridConstants {
 /// grazing) the 112 points at m = 0.2 went from 1.08 / 6.5 % (mean / p99) to 0.28 / 1.9 % on the
 /// courtyard, 0.64 / 4.3 to 0.32 / 2.8 % on the studio. Fewer than 64 nodes a side hold the step
 /// wider than the blur at grazing (at 48 one of the courtyard's points was 6.8 % off, against 3.3 %
-/// at 64, in the residual's term alone).
+/// at 64, in the residual's term alone). The blur share then went from 0.2 to 0.15 (2026-12-06):
+/// the top of a sphere in perspective reflects the courtyard's dark zenith, with bright walls in
+/// the lobe's tails, and there the grid read +7 % at 0.2 (the error grows as the share squared:
+/// +22 % at 0.4, +1.5 % at 0.1), p99 5.6 % on a 32² view, 2.8 % at 0.15; the 112 points at
+/// m = 0.2 0.28 / 1.9 → 0.21 / 1.6 % (courtyard), 0.32 / 2.7 → 0.32 / 2.9 % (studio). It costs
+/// (0.2/0.15)² the lookups face-on (681 at nv = 1, 1,747 at 0.4, 2,967 at most): a 512² sphere
+/// at m = 0.2, whole process on lavapipe, 2.18 → 3.12 s. At 0.1 the p99 of a 40² view was 1.0 %
+/// for 4× the lookups; 0.1 at a spacing of 3 (the same count as
+/// 0.15 at 2) rippled (studio 112 points 0.48 %), and at 4 more so (BENCHMARKS.md, "A dark zenith").
 pub const GRID: GridConstants = GridConstants {
-    blur_share: 0.2,
+    blur_share: 0.15,
     spacing: 2.0,
     reach: 4.5,
     max_half: 64,

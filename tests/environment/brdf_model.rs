@@ -291,10 +291,11 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 /// over the whole map, on the courtyard and studio HDRIs and the disc map, for m = 0.02, 0.05, 0.2,
 /// 0.5: the figures of BENCHMARKS.md ("The `brdf` environment model"). The issue asks for ≤ 1 %
 /// mean and ≤ 5 % p99: the disc map meets it at every m (the split took the disc out of the
-/// lookups) and is held to it, and so is every map at m = 0.5 (filtered importance sampling's 1,024
-/// samples; at 128 the courtyard read 2.50 % and 18.3 %) and at m = 0.2 (the grid; 1.08 / 6.5 % on
-/// the courtyard and 0.64 / 4.3 % on the studio before its smaller blur share and longer reach,
-/// `GRID`); the courtyard and the studio do not at the smaller m (relative errors of a few % where
+/// lookups) and is held to it, and so is every map at m = 0.5 (filtered importance sampling's 2,048
+/// samples; at 128 the courtyard read 2.50 % and 18.3 %, at 1,024 0.45 % and 3.8 %) and at m = 0.2
+/// (the grid; 1.08 / 6.5 % on the courtyard and 0.64 / 4.3 % on the studio before its smaller
+/// blur share and longer reach, `GRID`, and 0.28 / 1.9 % on the courtyard at its blur share of
+/// 0.2 before 0.15); the courtyard and the studio do not at the smaller m (relative errors of a few % where
 /// a dark point sits beside bright ones, which the lattice's one lookup across the plane of
 /// incidence misses even when exact: BENCHMARKS.md, "The smooth preset's error"), so every mean is
 /// also held to at most 1.25× its measured value, which catches a regression (the estimator is
@@ -307,7 +308,7 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 /// 1.60 / 1.80 %, then 1.05 / 1.25 %), 1.40 % at m = 0.02 before the fine layers continued the
 /// series below β_min (`BRDF_FINE_LAYERS`; the courtyard's 1.05 %, then 0.73 %), 1.33 % at m = 0.05
 /// before the lattice's 24 nodes a side at grazing (`LATTICE_MAX_HALF`, 12 before; now 0.90 %); at
-/// m = 0.5 it is 0.16 %, p99 1.4 % (0.44 %, 4.3 % at 128 samples), and its relative RMSE at
+/// m = 0.5 it is 0.14 %, p99 1.5 % (0.16 / 1.4 % at 1,024 samples, 0.44 / 4.3 % at 128), and its relative RMSE at
 /// m = 0.05 is 0.33 %. Each point's reference resolves the lobe there (`converged_subsamples`);
 /// with 3 × 3 cells a pixel, the rule until 2026-12-06, the point at nv = 0.035 read 4–5 % of the
 /// reference's own error at m = 0.02, and the courtyard's mean and p99 at m = 0.02 were
@@ -326,8 +327,8 @@ fn error_at_the_render_sample_count() {
     let pairs = accuracy_pairs();
     // Measured means (green, relative) per map and m = 0.02, 0.05, 0.2, 0.5; see the doc comment.
     let measured = [
-        [0.0070, 0.0122, 0.0028, 0.0045],
-        [0.0110, 0.0090, 0.0032, 0.0016],
+        [0.0070, 0.0122, 0.0021, 0.0023],
+        [0.0110, 0.0090, 0.0032, 0.0014],
         [0.0006, 0.0008, 0.0004, 0.0005],
     ];
     for ((name, source), bounds) in maps.iter().zip(measured) {
@@ -368,6 +369,83 @@ fn error_at_the_render_sample_count() {
                 assert!(mean <= 0.01 && p99 <= 0.05, "{name} m {m}: {mean}, {p99}");
             }
         }
+    }
+}
+
+/// The covered pixels of the issue's sphere as a camera sees it: the unit sphere from 4 units
+/// away on +Z, a 40° field of view, `size` × `size` pixels, each pixel centre's (N, V) with
+/// N·V ≥ 0.1. Unlike the orthographic points of `accuracy_pairs`, V turns with the pixel.
+fn perspective_sphere_pairs(size: u32) -> Vec<(DVec3, DVec3)> {
+    let eye = DVec3::new(0.0, 0.0, 4.0);
+    let half = (20.0_f64).to_radians().tan();
+    let mut pairs = Vec::new();
+    for y in 0..size {
+        for x in 0..size {
+            let px = (2.0 * (f64::from(x) + 0.5) / f64::from(size) - 1.0) * half;
+            let py = (1.0 - 2.0 * (f64::from(y) + 0.5) / f64::from(size)) * half;
+            let d = DVec3::new(px, py, -1.0).normalize();
+            // |eye + t·d| = 1: t² + 2 (eye·d) t + |eye|² − 1 = 0, the nearer root.
+            let b = eye.dot(d);
+            let disc = b * b - (eye.length_squared() - 1.0);
+            if disc <= 0.0 {
+                continue;
+            }
+            let n = eye + (-b - disc.sqrt()) * d;
+            let v = -d;
+            if n.dot(v) >= 0.1 {
+                pairs.push((n, v));
+            }
+        }
+    }
+    pairs
+}
+
+/// The issue's bounds (mean ≤ 1 %, p99 ≤ 5 %) on the sphere as a camera sees it, where the top
+/// of the sphere reflects the sky near the zenith: on the courtyard a dark patch (0.002–0.005)
+/// with bright walls in the lobe's tails at m ≥ 0.2. An independent audit found it on a 40²
+/// view (2026-12-06); the orthographic points of `accuracy_pairs` never reflect the zenith. The
+/// lookups' blur widens the lobe's tails (a sum of Gaussians in directions over nodes in
+/// slopes), which reads the walls into the dark patch: the grid at a blur share of 0.2 was +7 %
+/// there, and filtered importance sampling at 1,024 samples +10 %. Measured on this 32² view
+/// (392 points): m = 0.2 mean 0.35 %, p99 5.6 % at the grid's blur share of 0.2, 0.21 / 2.8 % at
+/// 0.15 (`GRID`); m = 0.5 0.41 / 5.1 % at 1,024 samples, 0.23 / 2.7 % at 2,048 (`BRDF_SAMPLES`).
+/// Held to the issue's bounds, which the earlier constants fail, and to 1.25× the measured p99.
+#[test]
+fn a_sphere_in_perspective_reflecting_a_dark_zenith() {
+    let courtyard = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/courtyard.hdr");
+    let source = load_environment(courtyard).unwrap().image;
+    let fresnel = FresnelTable::dielectric(1.5, 0.0045).unwrap();
+    let light = EnvironmentLight::default();
+    let prefilter = PrefilterParams::for_model(source.width, EnvironmentModel::Brdf);
+    let split = Split::of(&split_bright(&source), &prefilter, light);
+    let rough = Split::of(&split_bright_rough(&source), &prefilter, light);
+    let pairs = perspective_sphere_pairs(32);
+    // m, measured p99.
+    for (m, measured_p99) in [(0.2, 0.028), (0.5, 0.027)] {
+        let p = params(m);
+        let albedo = albedo_knots(&p, &fresnel);
+        let wants = reference(&source, &p, &pairs);
+        let mut rel: Vec<f64> = pairs
+            .par_iter()
+            .zip(&wants)
+            .map(|(&(n, v), want)| {
+                let material = (&p, &fresnel, &albedo[..]);
+                let got = brdf_specular(split.sources(&rough), BRDF_SAMPLES, material, n, v);
+                (got[1] - want[1]).abs() / want[1]
+            })
+            .collect();
+        rel.sort_by(f64::total_cmp);
+        let mean = rel.iter().sum::<f64>() / rel.len() as f64;
+        let p99 = rel[rel.len() * 99 / 100];
+        println!(
+            "m {m}, {} points: mean {:.2} %, p99 {:.1} %, worst {:.1} %",
+            rel.len(),
+            100.0 * mean,
+            100.0 * p99,
+            100.0 * rel[rel.len() - 1]
+        );
+        assert!(mean <= 0.01 && p99 <= 0.05, "m {m}: {mean}, {p99}");
+        assert!(p99 <= 1.25 * measured_p99, "m {m}: p99 {p99}");
     }
 }
 

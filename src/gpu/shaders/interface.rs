@@ -49,7 +49,7 @@ shader_interface! {
         /// Lobe samples of filtered importance sampling in `paper`'s control variate of the light
         /// between objects (lacquer_shade.glsl `integral_environment`): the `brdf` model's
         /// quadrature as it was at 128 samples, the camera's configuration otherwise. The `brdf`
-        /// model's own 1,024 (`BRDF_SAMPLES`) took a ray-traced `paper` render of a 512² m = 0.5
+        /// model's own 1,024 (`BRDF_SAMPLES` then; 2,048 now) took a ray-traced `paper` render of a 512² m = 0.5
         /// sphere from 1.8 to 7.1 s on lavapipe.
         ENV_VARIATE_SAMPLES: u32 = 128;
         /// The golden fraction (√5 − 1)/2 in 32-bit fixed point: point i of the Fibonacci
