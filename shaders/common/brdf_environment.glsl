@@ -344,6 +344,14 @@ float node_blur(vec3 v, vec3 h, vec3 tangent, vec3 bitangent, float x, float y, 
     return beta * sqrt(j_x * j_y / (4.0 * nv));
 }
 
+// A grid's blur share at nv: its own, but at least frame.env_grid_grazing.x towards grazing, a
+// smoothstep from nv = .y to .z (twin: `grid_blur_share`).
+float grid_blur_share(float share, float nv) {
+    vec4 g = frame.env_grid_grazing;
+    float x = clamp((nv - g.y) / (g.z - g.y), 0.0, 1.0);
+    return max(share, g.x * (1.0 - x * x * (3.0 - 2.0 * x)));
+}
+
 // The wider-lobe quadrature (twin: `specular_grid`, whose doc derives it): a grid of Beckmann
 // slopes from the lobe's Gaussian less the lookups' blur, each read at its node's blur from the
 // layers at `base`; `grid` its constants (frame.env_grid or env_variate_grid: t, spacing, reach,
@@ -351,7 +359,7 @@ float node_blur(vec3 v, vec3 h, vec3 tangent, vec3 bitangent, float x, float y, 
 vec3 specular_grid(LacquerParams p, vec3 n, vec3 v, float nv, int base, vec4 grid) {
     vec3 tangent, bitangent;
     incidence_frame(n, v, nv, tangent, bitangent);
-    float share = grid.x;
+    float share = grid_blur_share(grid.x, nv);
     float spacing = grid.y;
     float reach = grid.z;
     float sigma = p.beckmann_m * 0.70710678;

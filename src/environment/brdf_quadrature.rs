@@ -285,7 +285,8 @@ pub struct GridConstants {
 /// the top of a sphere in perspective reflects the courtyard's dark zenith, with bright walls in
 /// the lobe's tails, and there the grid read +7 % at 0.2 (the error grows as the share squared:
 /// +22 % at 0.4, +1.5 % at 0.1), p99 5.6 % on a 32² view, 2.8 % at 0.15; the 112 points at
-/// m = 0.2 0.28 / 1.9 → 0.21 / 1.6 % (courtyard), 0.32 / 2.7 → 0.32 / 2.9 % (studio). It costs
+/// m = 0.2 0.28 / 1.9 → 0.22 / 1.6 % (courtyard), 0.32 / 2.7 % (studio, with the share kept at
+/// 0.2 towards grazing by [`GRID_GRAZING`]; 2.9 % without). It costs
 /// (0.2/0.15)² the lookups face-on (681 at nv = 1, 1,747 at 0.4, 2,967 at most): a 512² sphere
 /// at m = 0.2, whole process on lavapipe, 2.18 → 3.12 s. At 0.1 the p99 of a 40² view was 1.0 %
 /// for 4× the lookups; 0.1 at a spacing of 3 (the same count as
@@ -296,6 +297,35 @@ pub const GRID: GridConstants = GridConstants {
     reach: 4.5,
     max_half: 64,
 };
+/// The least blur share of a grid towards grazing ([`grid_blur_share`]): `share` up to nv =
+/// `nv_full`, nothing from `nv_none`, a smoothstep between.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GrazingShare {
+    pub share: f64,
+    pub nv_full: f64,
+    pub nv_none: f64,
+}
+
+/// [`GRID`]'s blur share of 0.2 where it was measured best at grazing: at 0.15 the studio board
+/// seen 80° from its normal (nv = 0.17) at m = 0.2 read 1.01 / 3.4 % (mean / p99) instead of
+/// 0.94 / 2.8 %, at 0.1 1.07 / 4.4 %. The dark zenith the smaller share is for is seen at nv ≈
+/// 0.45–0.65. Below `VARIATE_GRID`'s share, so that grid is unchanged. Packed into
+/// `Frame::env_grid_grazing` (BENCHMARKS.md, "A dark zenith").
+pub const GRID_GRAZING: GrazingShare = GrazingShare {
+    share: 0.2,
+    nv_full: 0.25,
+    nv_none: 0.45,
+};
+
+/// A grid's blur share at nv: its own, but at least [`GRID_GRAZING`]'s towards grazing (twin of
+/// brdf_environment.glsl's `grid_blur_share`); continuous in nv.
+pub fn grid_blur_share(grid: &GridConstants, nv: f64) -> f64 {
+    let g = &GRID_GRAZING;
+    let x = ((nv - g.nv_full) / (g.nv_none - g.nv_full)).clamp(0.0, 1.0);
+    let floor = g.share * (1.0 - x * x * (3.0 - 2.0 * x));
+    grid.blur_share.max(floor)
+}
+
 /// The grid of `paper`'s control variate (`ENV_VARIATE_SAMPLES`), which needs only an estimate of
 /// the integral and should not pay the `brdf` model's accuracy: the grid before [`GRID`]. With
 /// [`GRID`] there a ray-traced `paper` render of the default scene with rough bowls at 512² took
@@ -428,7 +458,7 @@ pub fn specular_grid(
         return [0.0; 3];
     };
     let sigma = brdf.beckmann_m / std::f64::consts::SQRT_2;
-    let beta = 2.0 * nv * sigma * grid.blur_share;
+    let beta = 2.0 * nv * sigma * grid_blur_share(grid, nv);
     // The nodes' variances along and across the plane: the lobe's less the lookups' blur.
     let var_along = sigma * sigma - (0.5 * beta).powi(2);
     let var_across = sigma * sigma - (0.5 * beta / nv).powi(2);

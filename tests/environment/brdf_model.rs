@@ -295,7 +295,7 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 /// samples; at 128 the courtyard read 2.50 % and 18.3 %, at 1,024 0.45 % and 3.8 %) and at m = 0.2
 /// (the grid; 1.08 / 6.5 % on the courtyard and 0.64 / 4.3 % on the studio before its smaller
 /// blur share and longer reach, `GRID`, and 0.28 / 1.9 % on the courtyard at its blur share of
-/// 0.2 before 0.15); the courtyard and the studio do not at the smaller m (relative errors of a few % where
+/// 0.2 before 0.15, `GRID_GRAZING`); the courtyard and the studio do not at the smaller m (relative errors of a few % where
 /// a dark point sits beside bright ones, which the lattice's one lookup across the plane of
 /// incidence misses even when exact: BENCHMARKS.md, "The smooth preset's error"), so every mean is
 /// also held to at most 1.25× its measured value, which catches a regression (the estimator is
@@ -327,7 +327,7 @@ fn error_at_the_render_sample_count() {
     let pairs = accuracy_pairs();
     // Measured means (green, relative) per map and m = 0.02, 0.05, 0.2, 0.5; see the doc comment.
     let measured = [
-        [0.0070, 0.0122, 0.0021, 0.0023],
+        [0.0070, 0.0122, 0.0022, 0.0023],
         [0.0110, 0.0090, 0.0032, 0.0014],
         [0.0006, 0.0008, 0.0004, 0.0005],
     ];

@@ -273,6 +273,9 @@ shader_interface! {
             env_lattice_band: vec4,
             env_grid: vec4,
             env_variate_grid: vec4,
+            /// The grids' blur share towards grazing (`GRID_GRAZING`): at least x up to nv = y,
+            /// no floor from nv = z, a smoothstep between; w unused.
+            env_grid_grazing: vec4,
             /// x: the lattice's blur share t (`LATTICE_BLUR_SHARE`); y: the least m whose lattice
             /// reads the rough split where the camera looks (brdf_quadrature.rs
             /// `rough_lattice_m`); z: the largest m the rough lights' direction bins serve (the

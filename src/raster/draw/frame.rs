@@ -181,6 +181,13 @@ impl Frame {
         };
         self.env_grid = pack(&q::GRID);
         self.env_variate_grid = pack(&q::VARIATE_GRID);
+        let grazing = &q::GRID_GRAZING;
+        self.env_grid_grazing = [
+            grazing.share as f32,
+            grazing.nv_full as f32,
+            grazing.nv_none as f32,
+            0.0,
+        ];
     }
 
     /// Packs the `brdf` model's lights: the bright split's (at most `MAX_ENV_LIGHTS`, which
