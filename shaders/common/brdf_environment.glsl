@@ -286,10 +286,14 @@ vec3 quadrature_shares(float m, bool camera) {
     return camera ? vec3(lattice, 1.0 - lattice - fis, fis) : vec3(lattice, 0.0, 1.0 - lattice);
 }
 
+// 3t² − 2t³ on [0, 1], written out as its twin `smoothstep01` has it.
+float smoothstep01(float t) {
+    return t * t * (3.0 - 2.0 * t);
+}
+
 // 1 inside the reach, a smoothstep to 0 over its last `taper` share (twin: `lattice_taper`).
 float lattice_taper(float x) {
-    float t = clamp((1.0 - x) / frame.env_lattice.z, 0.0, 1.0);
-    return t * t * (3.0 - 2.0 * t);
+    return smoothstep01(clamp((1.0 - x) / frame.env_lattice.z, 0.0, 1.0));
 }
 
 // The narrow-lobe quadrature (twin: `specular_lattice`, whose doc derives it): nodes on the plane
@@ -349,7 +353,7 @@ float node_blur(vec3 v, vec3 h, vec3 tangent, vec3 bitangent, float x, float y, 
 float grid_blur_share(float share, float nv) {
     vec4 g = frame.env_grid_grazing;
     float x = clamp((nv - g.y) / (g.z - g.y), 0.0, 1.0);
-    return max(share, g.x * (1.0 - x * x * (3.0 - 2.0 * x)));
+    return max(share, g.x * (1.0 - smoothstep01(x)));
 }
 
 // The wider-lobe quadrature (twin: `specular_grid`, whose doc derives it): a grid of Beckmann

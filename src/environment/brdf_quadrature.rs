@@ -322,7 +322,7 @@ pub const GRID_GRAZING: GrazingShare = GrazingShare {
 pub fn grid_blur_share(grid: &GridConstants, nv: f64) -> f64 {
     let g = &GRID_GRAZING;
     let x = ((nv - g.nv_full) / (g.nv_none - g.nv_full)).clamp(0.0, 1.0);
-    let floor = g.share * (1.0 - x * x * (3.0 - 2.0 * x));
+    let floor = g.share * (1.0 - smoothstep01(x));
     grid.blur_share.max(floor)
 }
 
@@ -371,7 +371,11 @@ pub fn quadrature_shares(m: f64, camera: bool) -> [f64; 3] {
 /// smoothstep down to 0 at the reach, so a node that enters the lattice as nv changes enters with
 /// weight 0 and the estimate stays continuous in nv.
 pub fn lattice_taper(x: f64) -> f64 {
-    let t = ((1.0 - x) / LATTICE_TAPER).clamp(0.0, 1.0);
+    smoothstep01(((1.0 - x) / LATTICE_TAPER).clamp(0.0, 1.0))
+}
+
+/// 3t² − 2t³ on [0, 1], as the shaders write it out (`smoothstep01`).
+fn smoothstep01(t: f64) -> f64 {
     t * t * (3.0 - 2.0 * t)
 }
 
