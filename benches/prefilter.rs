@@ -74,6 +74,7 @@ fn bench(
         beta_max: 1.0,
         layer_texel: 1.0,
         fine_layers: 0,
+        blur_net_of_read: false,
     };
     let mut gpu_times = Vec::new();
     let mut cpu_seconds = Vec::new();

@@ -314,8 +314,9 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
     float step = max(min(spacing * 0.5 * beta0, frame.env_lattice_share.w * sigma_p),
         reach / max_half);
     float beta = max(beta0, 2.0 * step / spacing);
-    // At normal incidence σ_p, the reach and the step are 0: the mirror direction alone.
-    int half_count = step > 0.0 ? int(min(ceil(reach / step), max_half)) : 0;
+    // At normal incidence σ_p, the reach and the step are 0: the mirror direction alone. Only
+    // the nodes inside the reach: one at or beyond it has weight 0.
+    int half_count = step > 0.0 ? int(clamp(ceil(reach / step) - 1.0, 0.0, max_half)) : 0;
     // Every node reads the same blur: its layers, their texels and the blend found once.
     LayerPair pair = layer_pair_texels(beta, base);
     vec3 sum = vec3(0.0);

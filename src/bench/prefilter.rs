@@ -51,6 +51,7 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<PrefilterBench> {
         beta_max: 1.0,
         layer_texel: 1.0,
         fine_layers: 0,
+        blur_net_of_read: false,
     };
     params.validate()?;
     let prefilter = GpuPrefilter::new(gpu)?;

@@ -223,10 +223,15 @@ impl LookupSums {
 /// [`layered_radiance`]) 1.05 % at 3.0 and 0.99 % at 3.5, but 3.5 took the default scene's `brdf`
 /// draw from 1.67 to 1.84× `paper` (median of three interleaved runs), 3.0 to 1.73×: near
 /// face-on the nodes 2 steps out stay outside 3σ (BENCHMARKS.md, "Lookups at the blur they ask
-/// for").
+/// for"). The reach then went to 4 σ (2026-12-06) with the layers blurred net of their read
+/// (`params::BRDF_BLUR_NET_OF_READ`): a dark point beside a bright patch 4–6 σ away is all the
+/// lobe's tails. The 112 points at m = 0.05 went from 1.10 / 11.8 % (mean / p99, courtyard, the
+/// layers net of their read at 3 σ) to 0.81 / 4.5 %, at 3.5 σ 0.85 / 9.2 %; the default scene's
+/// `brdf` draw from 1.39–1.44 to 1.49–1.51× `paper` (three interleaved rounds; BENCHMARKS.md,
+/// "Layers net of their read").
 pub const LATTICE_BLUR_SHARE: f64 = 1.0;
 pub const LATTICE_SPACING: f64 = 2.0;
-pub const LATTICE_REACH: f64 = 3.0;
+pub const LATTICE_REACH: f64 = 4.0;
 pub const LATTICE_MAX_HALF: u32 = 24;
 /// The widest node step, in standard deviations σ_p of the nodes' distribution. Towards normal
 /// incidence the blur's step (2·nv·σ) outgrows σ_p, and the ±1 nodes fell outside the reach: one
@@ -415,9 +420,10 @@ pub fn specular_lattice(
         .min(LATTICE_MAX_STEP * sigma_p)
         .max(reach / f64::from(LATTICE_MAX_HALF));
     let beta = beta0.max(2.0 * step / LATTICE_SPACING);
-    // At normal incidence σ_p, the reach and the step are 0: the mirror direction alone.
+    // At normal incidence σ_p, the reach and the step are 0: the mirror direction alone. Only
+    // the nodes inside the reach: one at or beyond it has weight 0 (`lattice_taper`).
     let half = match step > 0.0 {
-        true => (reach / step).ceil().min(f64::from(LATTICE_MAX_HALF)) as i32,
+        true => ((reach / step).ceil() - 1.0).clamp(0.0, f64::from(LATTICE_MAX_HALF)) as i32,
         false => 0,
     };
     let mut sums = LookupSums::default();

@@ -55,6 +55,7 @@ impl CacheKey {
         hash.update(params.face_size.to_le_bytes());
         hash.update(params.layers.to_le_bytes());
         hash.update(params.fine_layers.to_le_bytes());
+        hash.update([u8::from(params.blur_net_of_read)]);
         for x in [
             params.beta_min,
             params.beta_max,
@@ -309,6 +310,7 @@ mod tests {
             beta_max: 1.0,
             layer_texel: 1.0,
             fine_layers: 0,
+            blur_net_of_read: false,
         };
         let source = Equirect::constant(4, 2, [1.0, 0.5, 0.25]);
         let key = CacheKey::new(&source, &params, EnvironmentLight::default());
@@ -362,6 +364,11 @@ mod tests {
             ..params
         };
         assert_ne!(key, CacheKey::new(&source, &fine_layers, light(1.0, 0.0)));
+        let net_of_read = PrefilterParams {
+            blur_net_of_read: !params.blur_net_of_read,
+            ..params
+        };
+        assert_ne!(key, CacheKey::new(&source, &net_of_read, light(1.0, 0.0)));
     }
 
     #[test]

@@ -574,7 +574,7 @@ impl GpuPrefilter {
         rec.bind_compute(&self.blur_layer, set);
         let constants = BlurLayerParams {
             face_size: layer.face_size,
-            beta: layer.beta as f32,
+            beta: layer.blur as f32,
             cutoff: LOBE_CUTOFF as f32,
         };
         rec.push_constants(&self.blur_layer, bytemuck::bytes_of(&constants));

@@ -66,7 +66,7 @@ pub fn prefilter_cpu(
         layers.push(if k == 0 {
             base.clone()
         } else {
-            blur_layer(mip_of_face(layer.face_size)?, layer.beta)
+            blur_layer(mip_of_face(layer.face_size)?, layer.blur)
         });
     }
     let irradiance = irradiance(mip_of_face(params.irradiance_face())?);
@@ -395,6 +395,7 @@ mod tests {
             beta_max: 1.0,
             layer_texel: 1.0,
             fine_layers: 0,
+            blur_net_of_read: false,
         };
         let env = prefilter_cpu(
             &Equirect::constant(64, 32, c),
@@ -638,6 +639,7 @@ mod tests {
             beta_max: 0.5,
             layer_texel: 1.0,
             fine_layers: 0,
+            blur_net_of_read: false,
         };
         assert!(prefilter_cpu(&src, &good, EnvironmentLight::new(f64::NAN, 0.0)).is_err());
         assert!(prefilter_cpu(&src, &good, EnvironmentLight::new(-1.0, 0.0)).is_err());

@@ -69,7 +69,22 @@ pub struct PrefilterParams {
     /// ratio, β_min/r, β_min/r², … (the `brdf` model's [`BRDF_FINE_LAYERS`]); 0 for SPEC's
     /// series.
     pub fine_layers: u32,
+    /// Each blurred layer convolved by its β less its texels' read ([`LayerPlan::blur`]), so that
+    /// a bilinear read of it is blurred by β: the `brdf` model's layers
+    /// ([`BRDF_BLUR_NET_OF_READ`]); false for SPEC's `paper` layers, convolved by β itself.
+    pub blur_net_of_read: bool,
 }
+
+/// [`PrefilterParams::blur_net_of_read`] of the `brdf` model's layers. A layer's texels are box
+/// means of the source (h²/12 of variance per axis, h = (π/2)/M) and a bilinear read between them
+/// adds a tent's h²/6 on average: a lookup of a layer convolved by β_k reads β_k² + h²/4
+/// ([`texel_read_variance`], what the lookups' blend already counts for the sharp layer 0),
+/// 3–13 % more variance than asked at the `brdf` layers' texels of 0.35–0.71 β, and a dark point
+/// beside a bright patch is all the lookups' tails. Convolved by √(β_k² − h²/4) instead, with the
+/// lattice's reach of 4 σ, the 112 points at m = 0.05 read 0.81 / 4.5 % (mean / p99, courtyard)
+/// against 1.10 / 10.3 % convolved by β_k; netting out 0.12, 0.2 or 0.3·h² instead of h²/4 gave
+/// 6.6, 4.5 and 5.1 % p99 (BENCHMARKS.md, "Layers net of their read").
+pub const BRDF_BLUR_NET_OF_READ: bool = true;
 
 /// [`PrefilterParams::layer_texel`] of the `brdf` model's layers: two thirds of β, so at least
 /// 1.5 texels across σ. Its lookups read a layer at the blur of their own node or sample, and a
@@ -108,6 +123,7 @@ impl PrefilterParams {
             beta_max: 1.0,
             layer_texel: 1.0,
             fine_layers: 0,
+            blur_net_of_read: false,
         }
     }
 
@@ -126,6 +142,7 @@ impl PrefilterParams {
                 layer_texel: BRDF_LAYER_TEXEL,
                 fine_layers: BRDF_FINE_LAYERS,
                 beta_max: BRDF_BETA_MAX,
+                blur_net_of_read: BRDF_BLUR_NET_OF_READ,
                 ..paper
             },
         }
@@ -203,13 +220,20 @@ impl PrefilterParams {
         (0..self.layers)
             .map(|k| {
                 let beta = self.beta(k);
+                let face_size = match k {
+                    0 => self.face_size,
+                    _ => layer_face_size(beta, self.layer_texel, self.face_size),
+                };
+                let blur = match self.blur_net_of_read && k > 0 {
+                    true => (beta * beta - texel_read_variance(face_size))
+                        .max(0.0)
+                        .sqrt(),
+                    false => beta,
+                };
                 LayerPlan {
                     beta,
-                    face_size: if k == 0 {
-                        self.face_size
-                    } else {
-                        layer_face_size(beta, self.layer_texel, self.face_size)
-                    },
+                    blur,
+                    face_size,
                 }
             })
             .collect()
@@ -347,11 +371,15 @@ impl EnvironmentLight {
     }
 }
 
-/// One blurred layer: its lobe width and the face size it is stored at. A blurred layer is
-/// convolved from the source mip of the same face size.
+/// One blurred layer: its lobe width, the width its convolution uses and the face size it is
+/// stored at. A blurred layer is convolved from the source mip of the same face size.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LayerPlan {
+    /// β_k: what a lookup of the layer reads.
     pub beta: f64,
+    /// The convolution's β: `beta`, or with [`PrefilterParams::blur_net_of_read`]
+    /// √(β_k² − h²/4), h the layer's texel; 0 for the sharp layer 0.
+    pub blur: f64,
     pub face_size: u32,
 }
 
@@ -472,6 +500,7 @@ mod tests {
             beta_max: 1.0,
             layer_texel: 1.0,
             fine_layers: 0,
+            blur_net_of_read: false,
         };
         let faces: Vec<u32> = p.plan().iter().map(|l| l.face_size).collect();
         // π/2/0.02 = 78.5 → 128; β_2 = 0.0384 → 40.9 → 64; … β_5 = 0.27 → 5.8 → 8 → clamped to 16.
@@ -493,6 +522,29 @@ mod tests {
         );
         let paper = PrefilterParams::for_model(1024, EnvironmentModel::Paper);
         assert_eq!(paper, PrefilterParams::for_source_width(1024));
+    }
+
+    #[test]
+    fn brdf_layers_are_convolved_net_of_their_read() {
+        let brdf = PrefilterParams::for_model(1024, EnvironmentModel::Brdf);
+        for (k, layer) in brdf.plan().iter().enumerate() {
+            let read = texel_read_variance(layer.face_size);
+            match k {
+                0 => assert_eq!(layer.blur, 0.0),
+                // What a bilinear read of the layer adds brings it back to β_k.
+                _ => assert!((layer.blur.powi(2) + read - layer.beta.powi(2)).abs() < 1e-15),
+            }
+            assert!(layer.blur <= layer.beta);
+        }
+        // At the `brdf` layers' texels (≤ 0.71 β) the read is at most 13 % of β².
+        let worst = brdf.plan()[1..]
+            .iter()
+            .map(|l| texel_read_variance(l.face_size) / l.beta.powi(2))
+            .fold(0.0, f64::max);
+        assert!(worst > 0.12 && worst < 0.13, "{worst}");
+        // SPEC's `paper` layers are convolved by β_k itself.
+        let paper = PrefilterParams::for_model(1024, EnvironmentModel::Paper);
+        assert!(paper.plan().iter().all(|l| l.blur == l.beta));
     }
 
     #[test]

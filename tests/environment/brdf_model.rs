@@ -290,29 +290,28 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 /// lattice where the split's blocks are small against the lobe) against the brute-force integral
 /// over the whole map, on the courtyard and studio HDRIs and the disc map, for m = 0.02, 0.05, 0.2,
 /// 0.5: the figures of BENCHMARKS.md ("The `brdf` environment model"). The issue asks for ≤ 1 %
-/// mean and ≤ 5 % p99: the disc map meets it at every m (the split took the disc out of the
-/// lookups) and is held to it, and so is every map at m = 0.5 (filtered importance sampling's 2,048
-/// samples; at 128 the courtyard read 2.50 % and 18.3 %, at 1,024 0.45 % and 3.8 %) and at m = 0.2
-/// (the grid; 1.08 / 6.5 % on the courtyard and 0.64 / 4.3 % on the studio before its smaller
-/// blur share and longer reach, `GRID`, and 0.28 / 1.9 % on the courtyard at its blur share of
-/// 0.2 before 0.15, `GRID_GRAZING`); the courtyard and the studio do not at the smaller m (relative errors of a few % where
-/// a dark point sits beside bright ones, which the lattice's one lookup across the plane of
-/// incidence misses even when exact: BENCHMARKS.md, "The smooth preset's error"), so every mean is
-/// also held to at most 1.25× its measured value, which catches a regression (the estimator is
-/// deterministic: the same build gives the same figures). The studio's means were 4.26 % (m = 0.2)
-/// and 14.0 % (0.5) before the rough split, 3.86 % (0.05) before the lattice read it, 2.23 % before
-/// the finer layers (`BRDF_LAYER_TEXEL`) and the lattice's widest step (`LATTICE_MAX_STEP`), 2.12 %
-/// before the first fine layer (at β_min/2, which took m = 0.02 from 2.45 to 1.87 % here and from
-/// 2.52 to 1.60 % on the courtyard), 1.87 / 1.66 % at m = 0.02 / 0.05 before the lattice's reach of
-/// 3 σ and the lookups' blend in variance (`LATTICE_REACH`, `layered_radiance`; the courtyard's
-/// 1.60 / 1.80 %, then 1.05 / 1.25 %), 1.40 % at m = 0.02 before the fine layers continued the
-/// series below β_min (`BRDF_FINE_LAYERS`; the courtyard's 1.05 %, then 0.73 %), 1.33 % at m = 0.05
-/// before the lattice's 24 nodes a side at grazing (`LATTICE_MAX_HALF`, 12 before; now 0.90 %); at
-/// m = 0.5 it is 0.14 %, p99 1.5 % (0.16 / 1.4 % at 1,024 samples, 0.44 / 4.3 % at 128), and its relative RMSE at
-/// m = 0.05 is 0.33 %. Each point's reference resolves the lobe there (`converged_subsamples`);
-/// with 3 × 3 cells a pixel, the rule until 2026-12-06, the point at nv = 0.035 read 4–5 % of the
-/// reference's own error at m = 0.02, and the courtyard's mean and p99 at m = 0.02 were
-/// 0.73 / 6.0 % instead of 0.70 / 5.4 %, the studio's 1.14 / 15.9 % instead of 1.10 / 15.9 %.
+/// mean and ≤ 5 % p99, and every case is held to it but the studio at m = 0.02, whose grazing
+/// points read a lobe narrower across the plane of incidence than a texel of the sharp layer
+/// (mean 1.02 %, p99 9.4 %; BENCHMARKS.md, "Layers net of their read"). Every mean is also held to
+/// at most 1.25× its measured value, which catches a regression (the estimator is deterministic:
+/// the same build gives the same figures). Each point's reference resolves the lobe there
+/// (`converged_subsamples`).
+///
+/// History (mean / p99, courtyard then studio): m = 0.02 0.70 / 5.4 and 1.10 / 15.9 %, m = 0.05
+/// 1.22 / 11.4 and 0.90 / 6.3 % before the layers were blurred net of their read and the lattice
+/// reached 4 σ (`BRDF_BLUR_NET_OF_READ`, `LATTICE_REACH`; now 0.57 / 4.0, 1.02 / 9.4, 0.81 / 4.5
+/// and 0.87 / 3.3 %). Before that, m = 0.2 1.08 / 6.5 % (courtyard) and 0.64 / 4.3 % (studio)
+/// before the grid's smaller blur share and longer reach (`GRID`), 0.28 / 1.9 % at its blur share
+/// of 0.2 before 0.15 (`GRID_GRAZING`); m = 0.5 2.50 / 18.3 % at 128 lobe samples, 0.45 / 3.8 % at
+/// 1,024 (courtyard); the studio's means 4.26 % (m = 0.2) and 14.0 % (0.5) before the rough split,
+/// 3.86 % (0.05) before the lattice read it, 2.23 % before the finer layers
+/// (`BRDF_LAYER_TEXEL`) and the lattice's widest step (`LATTICE_MAX_STEP`), 2.12 % before the
+/// first fine layer, 1.87 / 1.66 % at m = 0.02 / 0.05 before the lattice's reach of 3 σ and the
+/// lookups' blend in variance (`layered_radiance`), 1.40 % at m = 0.02 before the fine layers
+/// continued the series below β_min (`BRDF_FINE_LAYERS`), 1.33 % at m = 0.05 before the
+/// lattice's 24 nodes a side at grazing (`LATTICE_MAX_HALF`). With 3 × 3 cells a pixel for the
+/// reference, the rule until 2026-12-06, the point at nv = 0.035 read 4–5 % of the reference's
+/// own error at m = 0.02.
 #[test]
 fn error_at_the_render_sample_count() {
     let courtyard = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/courtyard.hdr");
@@ -327,8 +326,8 @@ fn error_at_the_render_sample_count() {
     let pairs = accuracy_pairs();
     // Measured means (green, relative) per map and m = 0.02, 0.05, 0.2, 0.5; see the doc comment.
     let measured = [
-        [0.0070, 0.0122, 0.0022, 0.0023],
-        [0.0110, 0.0090, 0.0032, 0.0014],
+        [0.0057, 0.0081, 0.0022, 0.0023],
+        [0.0102, 0.0087, 0.0032, 0.0014],
         [0.0006, 0.0008, 0.0004, 0.0005],
     ];
     for ((name, source), bounds) in maps.iter().zip(measured) {
@@ -365,7 +364,8 @@ fn error_at_the_render_sample_count() {
                 mean <= 1.25 * bound,
                 "{name} m {m}: mean {mean}, bound {bound}"
             );
-            if *name == "disc" || m == 0.2 || m == 0.5 {
+            // Every map and m but the studio at m = 0.02 meets the issue's bounds.
+            if !(*name == "studio" && m == 0.02) {
                 assert!(mean <= 0.01 && p99 <= 0.05, "{name} m {m}: {mean}, {p99}");
             }
         }

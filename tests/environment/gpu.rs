@@ -37,6 +37,7 @@ fn small_params(face_size: u32) -> PrefilterParams {
         beta_max: 1.0,
         layer_texel: 1.0,
         fine_layers: 0,
+        blur_net_of_read: false,
     }
 }
 
@@ -80,30 +81,41 @@ fn white_furnace_layers_are_constant_and_irradiance_is_pi_c() {
 fn gpu_layers_match_the_cpu_oracle_every_texel() {
     let gpu = validated_gpu();
     let source = synthetic_environment(512, 256);
-    let params = small_params(128);
-    let env = GpuPrefilter::new(&gpu)
-        .unwrap()
-        .run(&gpu, &source, &params, EnvironmentLight::new(1.5, 25.0))
-        .unwrap();
-    let got = env.read_back(&gpu).unwrap();
-    let want = oracle::prefilter_cpu(&source, &params, EnvironmentLight::new(1.5, 25.0)).unwrap();
-    let cubes = |e: &shikki::environment::PrefilteredEnvironment| -> Vec<CubeImage> {
-        e.layers.iter().chain([&e.irradiance]).cloned().collect()
-    };
-    for (k, (g, w)) in cubes(&got).iter().zip(cubes(&want).iter()).enumerate() {
-        assert_eq!(g.face_size, w.face_size, "cube {k}");
-        let worst = g
-            .texels
-            .iter()
-            .zip(&w.texels)
-            // Issue bound: 1e-3 relative, every texel (no floor needed: the map has no zeros).
-            .map(|(a, b)| rel_err(*a, *b, 0.0))
-            .fold(0.0, f64::max);
-        eprintln!(
-            "cube {k} (face {}): worst relative error {worst:.2e}",
-            g.face_size
-        );
-        assert!(worst <= 1e-3, "cube {k}: {worst:.3e}");
+    let prefilter = GpuPrefilter::new(&gpu).unwrap();
+    // SPEC's layers, and the `brdf` model's convolved net of their texels' read.
+    for blur_net_of_read in [false, true] {
+        let params = PrefilterParams {
+            blur_net_of_read,
+            ..small_params(128)
+        };
+        let env = prefilter
+            .run(&gpu, &source, &params, EnvironmentLight::new(1.5, 25.0))
+            .unwrap();
+        let got = env.read_back(&gpu).unwrap();
+        let want =
+            oracle::prefilter_cpu(&source, &params, EnvironmentLight::new(1.5, 25.0)).unwrap();
+        let cubes = |e: &shikki::environment::PrefilteredEnvironment| -> Vec<CubeImage> {
+            e.layers.iter().chain([&e.irradiance]).cloned().collect()
+        };
+        for (k, (g, w)) in cubes(&got).iter().zip(cubes(&want).iter()).enumerate() {
+            assert_eq!(g.face_size, w.face_size, "cube {k}");
+            let worst = g
+                .texels
+                .iter()
+                .zip(&w.texels)
+                // Issue bound: 1e-3 relative, every texel (no floor needed: the map has no zeros).
+                .map(|(a, b)| rel_err(*a, *b, 0.0))
+                .fold(0.0, f64::max);
+            eprintln!(
+                "net of read {blur_net_of_read}, cube {k} (face {}): worst relative error \
+                 {worst:.2e}",
+                g.face_size
+            );
+            assert!(
+                worst <= 1e-3,
+                "net of read {blur_net_of_read}, cube {k}: {worst:.3e}"
+            );
+        }
     }
     assert_no_validation_messages(&gpu);
 }
@@ -712,6 +724,7 @@ fn step_one_reads_exactly_the_oracles_source_pixels() {
             beta_max: 1.0,
             layer_texel: 1.0,
             fine_layers: 0,
+            blur_net_of_read: false,
         };
         let env = prefilter
             .run(&gpu, &source, &params, EnvironmentLight::new(1.0, rotation))

@@ -47,6 +47,7 @@ fn synthetic_params() -> PrefilterParams {
         beta_max: 1.0,
         layer_texel: 1.0,
         fine_layers: 0,
+        blur_net_of_read: false,
     }
 }
 
