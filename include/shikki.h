@@ -293,7 +293,9 @@ enum ShikkiStatus shikki_environment_destroy(struct ShikkiEnvironment environmen
 // for `index_count` u32; `out` is valid for one write.
 enum ShikkiStatus shikki_mesh_create(const float *positions, const float *normals, size_t vertex_count, const uint32_t *indices, size_t index_count, struct ShikkiMesh *out);
 
-// Loads a mesh file (OBJ, glTF/GLB; missing normals are generated).
+// Loads a mesh file (OBJ, glTF/GLB; missing normals are generated). What the loader changed
+// (generated normals, degenerate triangles or point and line elements left out) is said by the
+// warning callback of each renderer that renders a scene with the mesh, once per file.
 //
 // # Safety
 // `path` is a NUL-terminated UTF-8 string; `out` is valid for one write.

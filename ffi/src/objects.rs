@@ -9,18 +9,27 @@ use std::sync::Arc;
 use shikki::environment::gpu::{MIN_SOURCE_HEIGHT, MIN_SOURCE_WIDTH};
 use shikki::environment::load::{MAX_PIXELS, MAX_SIDE};
 use shikki::environment::{load_environment, Equirect, LoadedEnvironment};
-use shikki::raster::mesh_io::{angle_weighted_normals, load_mesh, MAX_TRIANGLES, MAX_VERTICES};
+use shikki::raster::mesh_io::{angle_weighted_normals, MAX_TRIANGLES, MAX_VERTICES};
 use shikki::raster::{BuiltinMesh, Mesh};
+use shikki::scene::parse::FileMesh;
+use shikki::scene::MeshSource;
 
-use crate::boundary::{c_str, check_out, ffi_boundary, slice, write_out, FfiError};
+use crate::boundary::{c_str, check_out, ffi_boundary, slice, write_out, FfiError, FfiResult};
 use crate::handles::{self, ShikkiEnvironment, ShikkiMesh};
 use crate::status::ShikkiStatus;
 
 /// An environment handle's object: the radiance map as loaded (with how many pixels were
 /// replaced, which the renderer reports as a warning), shared with the scenes that use it.
 pub type EnvironmentObject = Arc<LoadedEnvironment>;
-/// A mesh handle's object, shared with the scenes that use it.
-pub type MeshObject = Arc<Mesh>;
+/// A mesh handle's object, shared with the scenes that use it: a mesh in memory
+/// (`MeshSource::Inline`) or a file loaded with what its loader changed (`MeshSource::Loaded`),
+/// which the renders of a scene that uses it hand to the warning callback.
+pub type MeshObject = MeshSource;
+
+/// The mesh a handle holds (every kind the C API makes is in memory).
+pub fn mesh_of(object: &MeshObject) -> FfiResult<Arc<Mesh>> {
+    Ok(object.load()?)
+}
 
 /// Loads an equirectangular radiance map (`.hdr` or `.exr`, or `builtin:studio`).
 ///
@@ -164,13 +173,15 @@ pub unsafe extern "C" fn shikki_mesh_create(
             indices,
         };
         mesh.validate()?;
-        let handle = handles::insert::<ShikkiMesh, _>(Arc::new(mesh));
+        let handle = handles::insert::<ShikkiMesh, _>(MeshSource::Inline(Arc::new(mesh)));
         // SAFETY: checked non-NULL; valid for one write by contract.
         unsafe { write_out(out, "out", handle) }
     })
 }
 
-/// Loads a mesh file (OBJ, glTF/GLB; missing normals are generated).
+/// Loads a mesh file (OBJ, glTF/GLB; missing normals are generated). What the loader changed
+/// (generated normals, degenerate triangles or point and line elements left out) is said by the
+/// warning callback of each renderer that renders a scene with the mesh, once per file.
 ///
 /// # Safety
 /// `path` is a NUL-terminated UTF-8 string; `out` is valid for one write.
@@ -183,8 +194,12 @@ pub unsafe extern "C" fn shikki_mesh_load(
         check_out(out, "out")?;
         // SAFETY: the caller's contract above.
         let path = unsafe { c_str(path, "path") }?;
-        let mesh = load_mesh(Path::new(path))?;
-        let handle = handles::insert::<ShikkiMesh, _>(Arc::new(mesh));
+        let path = Path::new(path);
+        let file = FileMesh::load(path)?;
+        let handle = handles::insert::<ShikkiMesh, _>(MeshSource::Loaded {
+            path: path.to_path_buf(),
+            file,
+        });
         // SAFETY: checked non-NULL; valid for one write by contract.
         unsafe { write_out(out, "out", handle) }
     })
@@ -205,7 +220,7 @@ pub unsafe extern "C" fn shikki_mesh_create_builtin(
         // SAFETY: the caller's contract above.
         let name = unsafe { c_str(name, "name") }?;
         let mesh = BuiltinMesh::parse(name)?.mesh();
-        let handle = handles::insert::<ShikkiMesh, _>(Arc::new(mesh));
+        let handle = handles::insert::<ShikkiMesh, _>(MeshSource::Inline(Arc::new(mesh)));
         // SAFETY: checked non-NULL; valid for one write by contract.
         unsafe { write_out(out, "out", handle) }
     })
@@ -222,8 +237,7 @@ pub unsafe extern "C" fn shikki_mesh_counts(
     triangle_count: *mut usize,
 ) -> ShikkiStatus {
     ffi_boundary!({
-        let object = handles::get::<_, MeshObject>(mesh)?;
-        let mesh = handles::lock(&object)?;
+        let mesh = mesh_of(&handles::read::<_, MeshObject>(mesh)?)?;
         if !vertex_count.is_null() {
             // SAFETY: non-NULL and writable by contract.
             unsafe { write_out(vertex_count, "vertex_count", mesh.positions.len()) }?;

@@ -14,7 +14,7 @@ use shikki::model::LacquerMaterial;
 use shikki::output::ToneCurve;
 use shikki::raster::draw::{Background, MAX_BOUNCES, MAX_RAYS, SUPPORTED_SAMPLES};
 use shikki::raster::{default_lights, Camera, Light, MAX_LIGHTS};
-use shikki::scene::{EnvironmentModel, EnvironmentSpec, MeshSource, Scene, SceneObject};
+use shikki::scene::{EnvironmentModel, EnvironmentSpec, Scene, SceneObject};
 
 use crate::boundary::{array, check_out, ffi_boundary, write_out, FfiError, FfiResult};
 use crate::handles::{self, ShikkiEnvironment, ShikkiMaterial, ShikkiMesh, ShikkiScene};
@@ -133,7 +133,7 @@ pub unsafe extern "C" fn shikki_scene_add_object(
         let material = handles::read::<_, LacquerMaterial>(material)?;
         with_scene(scene, |state| {
             state.objects.push(SceneObject {
-                mesh: MeshSource::Inline(mesh),
+                mesh,
                 transform,
                 material,
             });

@@ -8,18 +8,23 @@ use std::path::Path;
 use std::sync::Arc;
 
 use shikki::environment::{load_environment, EnvironmentSource};
-use shikki::raster::mesh_io::load_mesh;
+use shikki::scene::parse::FileMesh;
 use shikki::scene::{self, EnvironmentSpec, MeshSource, Scene};
 
 use crate::boundary::{c_str, check_out, ffi_boundary, opt_c_str, write_out, FfiResult};
 use crate::handles::{self, ShikkiScene};
 use crate::status::ShikkiStatus;
 
-/// `scene` with every file it names loaded into memory (built-in meshes stay built-in).
+/// `scene` with every file it names loaded into memory (built-in meshes stay built-in; a mesh
+/// file keeps its path and what its loader changed, which its renders report).
 pub fn loaded_scene(mut scene: Scene) -> FfiResult<Scene> {
     for object in &mut scene.objects {
         if let MeshSource::File(path) = &object.mesh {
-            object.mesh = MeshSource::Inline(Arc::new(load_mesh(path)?));
+            let file = FileMesh::load(path)?;
+            object.mesh = MeshSource::Loaded {
+                path: path.clone(),
+                file,
+            };
         }
     }
     if let EnvironmentSpec::Map { source, .. } = &mut scene.environment {

@@ -57,6 +57,13 @@ pub enum MeshSource {
     Builtin(BuiltinMesh),
     /// An OBJ, glTF or GLB file (already resolved against the scene file's directory).
     File(PathBuf),
+    /// A mesh file loaded ahead of the render (the C API's `shikki_mesh_load`, and the files of
+    /// the scenes it loads), with what its loader changed: a render reports them as it does a
+    /// file's (`Warning::MeshLoadNotes`).
+    Loaded {
+        path: PathBuf,
+        file: parse::FileMesh,
+    },
     /// A mesh handed over in memory (the C API).
     Inline(Arc<Mesh>),
 }
@@ -68,6 +75,7 @@ impl MeshSource {
         Ok(match self {
             MeshSource::Builtin(builtin) => Arc::new(builtin.mesh()),
             MeshSource::File(path) => parse::cached_file_mesh(path)?,
+            MeshSource::Loaded { file, .. } => file.mesh.clone(),
             MeshSource::Inline(mesh) => mesh.clone(),
         })
     }

@@ -499,10 +499,21 @@ type MeshCache = Mutex<Vec<(PathBuf, u64, Option<std::time::SystemTime>, FileMes
 
 /// A mesh file as loaded, with what the loader changed (`LoadReport::notes`; empty when it loaded
 /// as written).
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 pub struct FileMesh {
     pub mesh: Arc<Mesh>,
     pub notes: Arc<[String]>,
+}
+
+impl FileMesh {
+    /// Loads the mesh file at `path` (not from the process cache).
+    pub fn load(path: &Path) -> Result<Self> {
+        let (mesh, report) = load_mesh_with_report(path)?;
+        Ok(Self {
+            mesh: Arc::new(mesh),
+            notes: report.notes().into(),
+        })
+    }
 }
 
 /// Loads (or finds in the process cache) the mesh file at `path`.
@@ -527,11 +538,7 @@ pub fn cached_file_mesh_noted(path: &Path) -> Result<FileMesh> {
             return Ok(hit.3.clone());
         }
     }
-    let (mesh, report) = load_mesh_with_report(path)?;
-    let file = FileMesh {
-        mesh: Arc::new(mesh),
-        notes: report.notes().into(),
-    };
+    let file = FileMesh::load(path)?;
     if let Ok(mut entries) = cache.lock() {
         entries.retain(|(p, ..)| p != path);
         entries.push((path.to_path_buf(), stamp.0, stamp.1, file.clone()));

@@ -299,13 +299,17 @@ impl SceneRenderer {
     /// Says what the loader changed in a mesh file (once per file and renderer: a batch names the
     /// same file in every job).
     fn note_mesh_file(&mut self, source: &MeshSource) -> Result<()> {
-        let MeshSource::File(path) = source else {
-            return Ok(());
+        let path = match source {
+            MeshSource::File(path) | MeshSource::Loaded { path, .. } => path,
+            MeshSource::Builtin(_) | MeshSource::Inline(_) => return Ok(()),
         };
         if self.noted_meshes.contains(path) {
             return Ok(());
         }
-        let notes = parse::cached_file_mesh_noted(path)?.notes;
+        let notes = match source {
+            MeshSource::Loaded { file, .. } => file.notes.clone(),
+            _ => parse::cached_file_mesh_noted(path)?.notes,
+        };
         if !notes.is_empty() {
             self.warnings.push(Warning::MeshLoadNotes {
                 mesh: path.clone(),
