@@ -14,7 +14,7 @@ use shikki::raster::{BuiltinMesh, Mesh};
 use shikki::scene::parse::FileMesh;
 use shikki::scene::MeshSource;
 
-use crate::boundary::{c_str, check_out, ffi_boundary, slice, write_out, FfiError, FfiResult};
+use crate::boundary::{c_str, check_out, ffi_boundary, slice, write_out, FfiError};
 use crate::handles::{self, ShikkiEnvironment, ShikkiMesh};
 use crate::status::ShikkiStatus;
 
@@ -25,11 +25,6 @@ pub type EnvironmentObject = Arc<LoadedEnvironment>;
 /// (`MeshSource::Inline`) or a file loaded with what its loader changed (`MeshSource::Loaded`),
 /// which the renders of a scene that uses it hand to the warning callback.
 pub type MeshObject = MeshSource;
-
-/// The mesh a handle holds (every kind the C API makes is in memory).
-pub fn mesh_of(object: &MeshObject) -> FfiResult<Arc<Mesh>> {
-    Ok(object.load()?)
-}
 
 /// Loads an equirectangular radiance map (`.hdr` or `.exr`, or `builtin:studio`).
 ///
@@ -237,7 +232,8 @@ pub unsafe extern "C" fn shikki_mesh_counts(
     triangle_count: *mut usize,
 ) -> ShikkiStatus {
     ffi_boundary!({
-        let mesh = mesh_of(&handles::read::<_, MeshObject>(mesh)?)?;
+        // Every kind of mesh the C API makes is in memory: `load` only shares it.
+        let mesh = handles::read::<_, MeshObject>(mesh)?.load()?;
         if !vertex_count.is_null() {
             // SAFETY: non-NULL and writable by contract.
             unsafe { write_out(vertex_count, "vertex_count", mesh.positions.len()) }?;
