@@ -29,6 +29,7 @@ use shikki::environment::brdf_quadrature::{
     albedo_knots, brdf_specular, BrdfSources, BRDF_SAMPLES,
 };
 use shikki::environment::bright::{split_bright, split_bright_rough};
+use shikki::environment::sharp_source::SharpSource;
 use shikki::environment::{
     load_environment, prefilter_cpu, EnvironmentLight, EnvironmentModel, PrefilterParams,
 };
@@ -59,12 +60,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (lights, rough_lights) = (split.lights_in_world(light), rough.lights_in_world(light));
     let residual = prefilter_cpu(&split.residual, &prefilter, light)?;
     let rough_residual = prefilter_cpu(&rough.residual, &prefilter, light)?;
+    let sharp = SharpSource::new(&split.residual, light);
+    let rough_sharp = SharpSource::new(&rough.residual, light);
     let sources = BrdfSources {
         residual: &residual,
         lights: &lights,
         rough_residual: &rough_residual,
         rough_lights: &rough_lights,
         rough_block_angle: rough.block_angle,
+        sharp: sharp.as_ref(),
+        rough_sharp: rough_sharp.as_ref(),
     };
     let fresnel = FresnelTable::dielectric(1.5, 0.0045)?;
     println!("{path}");

@@ -35,6 +35,7 @@
 #include "cubemap.glsl"
 #include "texel_buffer.glsl"
 #include "layer_pair.glsl"
+#include "visible_normals.glsl"
 // Two texels of a layer's face rows in each (layer_pair.glsl).
 layout(set = 0, binding = ENV_LAYER_TEXELS_BINDING) uniform utextureBuffer env_layer_texels;
 
@@ -235,22 +236,32 @@ vec3 binned_rough_bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
 }
 
 // One lookup of either quadrature: the reflection s of v about the half vector h (vh = V·H > 0),
-// read at β and weighted by scale·F(acos V·H)·G·(V·H)/(nv·nh); nothing where s is below the
-// surface (twin: `LookupSums::add`).
-// `add_lookup` reading the layers of `pair`.
-void add_lookup_pair(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, float scale,
-    LayerPair pair, inout vec3 sum, inout vec3 weights) {
-    vec3 s = 2.0 * vh * h - v;
+// weighted by scale·F(acos V·H)·G·(V·H)/(nv·nh); false where s is below the surface (twin:
+// `LookupSums::add_read`).
+bool lookup_weight(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, float scale,
+    out vec3 s, out vec3 weight) {
+    s = 2.0 * vh * h - v;
+    weight = vec3(0.0);
     float nl = dot(n, s);
     if (nl <= 0.0) {
-        return;
+        return false;
     }
     float cos_h = dot(n, h);
     float g = cook_torrance_g(cos_h, nv, nl, vh);
     vec3 f = lacquer_fresnel(p, angle_deg_of_cos(min(vh, 1.0)));
-    vec3 weight = f * (scale * g * vh / (nv * cos_h));
-    sum += weight * layered_radiance_pair(s, pair);
-    weights += weight;
+    weight = f * (scale * g * vh / (nv * cos_h));
+    return true;
+}
+
+// `lookup_weight`'s lookup read at β from the layers of `pair` (twin: `LookupSums::add`).
+void add_lookup_pair(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, float scale,
+    LayerPair pair, inout vec3 sum, inout vec3 weights) {
+    vec3 s;
+    vec3 weight;
+    if (lookup_weight(p, n, v, nv, h, vh, scale, s, weight)) {
+        sum += weight * layered_radiance_pair(s, pair);
+        weights += weight;
+    }
 }
 
 void add_lookup(LacquerParams p, vec3 n, vec3 v, float nv, vec3 h, float vh, float scale,
@@ -296,6 +307,126 @@ float lattice_taper(float x) {
     return smoothstep01(clamp((1.0 - x) / frame.env_lattice.z, 0.0, 1.0));
 }
 
+// Φ(x), the standard normal distribution (twin: sharp_source.rs `normal_cdf`).
+float normal_cdf(float x) {
+    float tail = 0.5 * erfc_positive(abs(x) * 0.70710678);
+    return x >= 0.0 ? 1.0 - tail : tail;
+}
+
+// The widest β a sharp read at e (the environment's frame) takes: frame.env_sharp_read.x
+// (`SHARP_SIGMA`) of a row's height or a column's width there (twin: `SharpSource::widest_beta`).
+float sharp_widest_beta(vec3 e) {
+    float row = PI / float(frame.env_sharp.w);
+    float column = 2.0 * PI / float(frame.env_sharp.z) * length(e.xz);
+    return frame.env_sharp_read.x * min(row, column);
+}
+
+// The most rows a sharp read covers: 2·SHARP_REACH·SHARP_SIGMA + 1 = 7, and one for rounding.
+const int SHARP_MAX_ROWS = 8;
+
+// A residual's own pixels from texel `first` at e (the environment's frame) through a Gaussian of
+// width β ≤ `sharp_widest_beta` (twin: `SharpSource::radiance`, whose module doc derives it):
+// each pixel weighs the normal distribution's share of its column times its row's, out to
+// frame.env_sharp_read.y σ, whole texels (pixel pairs) at a time.
+vec3 sharp_pixels(int first, vec3 e, float beta) {
+    vec2 uv = direction_to_equirect(e);
+    int width = frame.env_sharp.z;
+    int height = frame.env_sharp.w;
+    float x = uv.x * float(width);
+    float y = uv.y * float(height);
+    float sigma_y = beta * float(height) / PI;
+    float sigma_x = beta * float(width) / (2.0 * PI * length(e.xz));
+    float reach = frame.env_sharp_read.y;
+    int top = int(floor(y - reach * sigma_y));
+    int bottom = min(int(floor(y + reach * sigma_y)), top + SHARP_MAX_ROWS - 1);
+    // Rows beyond the poles are no pixels: those inside are normalised.
+    float row_weight[SHARP_MAX_ROWS];
+    for (int j = top; j <= bottom; ++j) {
+        row_weight[j - top] = (j >= 0 && j < height)
+            ? normal_cdf((float(j) + 1.0 - y) / sigma_y) - normal_cdf((float(j) - y) / sigma_y)
+            : 0.0;
+    }
+    int first_pair = int(floor(floor(x - reach * sigma_x) * 0.5));
+    int last_pair = int(floor(floor(x + reach * sigma_x) * 0.5));
+    int pairs = width / 2;
+    vec3 sum = vec3(0.0);
+    float total = 0.0;
+    float left = normal_cdf((float(2 * first_pair) - x) / sigma_x);
+    for (int pair = first_pair; pair <= last_pair; ++pair) {
+        float middle = normal_cdf((float(2 * pair) + 1.0 - x) / sigma_x);
+        float right = normal_cdf((float(2 * pair) + 2.0 - x) / sigma_x);
+        float w0 = middle - left;
+        float w1 = right - middle;
+        left = right;
+        // Columns wrap: a pair is at most two beyond either end, so one add or subtract is the
+        // remainder (integer % is not vectorised on lavapipe).
+        int column = pair < 0 ? pair + pairs : (pair >= pairs ? pair - pairs : pair);
+        for (int j = max(top, 0); j <= min(bottom, height - 1); ++j) {
+            uvec4 texel = texelFetch(env_layer_texels, first + j * pairs + column);
+            float wy = row_weight[j - top];
+            sum += wy * (w0 * layer_first(texel) + w1 * layer_second(texel));
+            total += wy * (w0 + w1);
+        }
+    }
+    return total > 0.0 ? sum / total : vec3(0.0);
+}
+
+// A lattice lookup at β below layer 1's from a residual's own pixels (twin: `sharp_radiance`):
+// their Gaussian at β, or where β is wider than a read there may be, the widest read blended with
+// layer 1 (`layer1`, read alone) in variance; `pair` the layers for β, read at a pole's point.
+vec3 sharp_radiance(int first, vec3 d, float beta, LayerPair pair, LayerPair layer1) {
+    vec3 e = world_to_environment(d, frame.env_sharp_rotation.x, frame.env_sharp_rotation.y);
+    float b = min(beta, sharp_widest_beta(e));
+    if (!(b > 0.0)) {
+        return layered_radiance_pair(d, pair);
+    }
+    vec3 sharp = sharp_pixels(first, e, b);
+    if (beta <= b) {
+        return sharp;
+    }
+    float beta1 = layer_beta(1);
+    float t = (beta * beta - b * b) / (beta1 * beta1 - b * b);
+    vec3 layer = layered_radiance_pair(d, layer1);
+    return sharp + (layer - sharp) * t;
+}
+
+// `specular_lattice`'s nodes where it reads the residual's own pixels (by `shape.w`, the node
+// count's share of them, the layers of `pair` the rest): `along` its plane's tangent and step,
+// `shape` its σ_p, reach, β.
+vec3 sharp_lattice(LacquerParams p, vec3 n, vec3 v, float nv, vec4 along, vec4 shape,
+    int half_count, LayerPair pair, int base) {
+    float sigma_p = shape.x;
+    float reach = shape.y;
+    float beta = shape.z;
+    float sharp_share = shape.w;
+    int first = base == 0 ? frame.env_sharp.x : frame.env_sharp.y;
+    // Layer 1 alone, for the widest read's blend with it.
+    LayerPair layer1 = LayerPair(frame.layer_face_size[0][1], base + frame.layer_first_texel[0][1],
+        frame.layer_face_size[0][1], base + frame.layer_first_texel[0][1], 0.0);
+    vec3 sum = vec3(0.0);
+    vec3 weights = vec3(0.0);
+    for (int i = -half_count; i <= half_count; ++i) {
+        float slope = float(i) * along.w;
+        float gauss = sigma_p > 0.0
+            ? exp(-0.5 * (slope / sigma_p) * (slope / sigma_p)) * lattice_taper(abs(slope) / reach)
+            : 1.0;
+        vec3 h = normalize(along.xyz * slope + n);
+        float vh = dot(v, h);
+        vec3 s;
+        vec3 weight;
+        if (gauss > 0.0 && vh > 0.0 && lookup_weight(p, n, v, nv, h, vh, gauss, s, weight)) {
+            vec3 radiance = sharp_radiance(first, s, beta, pair, layer1);
+            if (sharp_share < 1.0) {
+                vec3 layers = layered_radiance_pair(s, pair);
+                radiance = layers + (radiance - layers) * sharp_share;
+            }
+            sum += weight * radiance;
+            weights += weight;
+        }
+    }
+    return normalized_lookups(p, nv, sum, weights);
+}
+
 // The narrow-lobe quadrature (twin: `specular_lattice`, whose doc derives it): nodes on the plane
 // of incidence at Beckmann slopes i·step, each read at the blur β that supplies the lobe's width
 // across the plane, weighted by the Gaussian of the rest of the in-plane spread.
@@ -319,6 +450,17 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
     int half_count = step > 0.0 ? int(clamp(ceil(reach / step) - 1.0, 0.0, max_half)) : 0;
     // Every node reads the same blur: its layers, their texels and the blend found once.
     LayerPair pair = layer_pair_texels(beta, base);
+    // Below layer 1's β the residual's own pixels, by the node count's share (twin:
+    // `sharp_share`), in a loop of its own: beside the layers' loop its reads cost every other
+    // pixel of the draw ~5 % (BENCHMARKS.md).
+    vec4 read = frame.env_sharp_read;
+    float sharp_share = frame.env_sharp.z > 0 && beta < layer_beta(1)
+        ? (step > 0.0 ? clamp((read.w - reach / step) / (read.w - read.z), 0.0, 1.0) : 1.0)
+        : 0.0;
+    if (sharp_share > 0.0) {
+        return sharp_lattice(p, n, v, nv, vec4(tangent, step), vec4(sigma_p, reach, beta,
+            sharp_share), half_count, pair, base);
+    }
     vec3 sum = vec3(0.0);
     vec3 weights = vec3(0.0);
     for (int i = -half_count; i <= half_count; ++i) {

@@ -20,6 +20,7 @@ use super::cube::{direction_to_face, face_direction};
 use super::image::{CubeImage, PrefilteredEnvironment};
 use super::layer_pair;
 use super::params::{layer_blend, texel_read_variance};
+use super::sharp_source::{SharpSource, SHARP_NODES};
 use crate::gpu::shaders::interface::{
     ALBEDO_KNOTS, BRIGHT_LOBE_CULL, ENV_VARIATE_SAMPLES, FIBONACCI_STEP,
 };
@@ -173,10 +174,23 @@ impl LookupSums {
         &mut self,
         env: &PrefilteredEnvironment,
         fresnel: &FresnelTable,
-        (n, v, nv): (DVec3, DVec3, f64),
+        incidence: (DVec3, DVec3, f64),
         h: DVec3,
         scale: f64,
         beta: impl FnOnce(f64) -> f64,
+    ) {
+        let read = |s: DVec3, vh: f64| layered_radiance(env, s, beta(vh));
+        self.add_read(fresnel, incidence, h, scale, read);
+    }
+
+    /// [`add`](Self::add) with the radiance at s from `read(s, V·H)`.
+    fn add_read(
+        &mut self,
+        fresnel: &FresnelTable,
+        (n, v, nv): (DVec3, DVec3, f64),
+        h: DVec3,
+        scale: f64,
+        read: impl FnOnce(DVec3, f64) -> [f64; 3],
     ) {
         let cos_h = n.dot(h);
         let vh = v.dot(h);
@@ -188,7 +202,7 @@ impl LookupSums {
         let g = cook_torrance_g(cos_h, nv, nl, vh);
         let f = fresnel.eval(vh.min(1.0).acos().to_degrees());
         let weight = scale * g * vh / (nv * cos_h);
-        let radiance = layered_radiance(env, s, beta(vh));
+        let radiance = read(s, vh);
         for c in 0..3 {
             self.sum[c] += f[c] * weight * radiance[c];
             self.weights[c] += f[c] * weight;
@@ -396,9 +410,11 @@ fn smoothstep01(t: f64) -> f64 {
 /// σ_p² = σ² − (β/2)²,
 /// times F·G·(V·H)/(nv·nh) (`lattice_taper` at the reach). At normal incidence that is one
 /// lookup; towards grazing, more (at most 2·`LATTICE_MAX_HALF` + 1, the spacing and blur growing
-/// past that). Normalised by A(nv) like [`specular_quadrature`].
+/// past that). Below layer 1's β the nodes read the residual's own pixels instead
+/// ([`sharp_radiance`], where `sharp` has them), as far as the lattice's node count allows
+/// ([`sharp_share`]). Normalised by A(nv) like [`specular_quadrature`].
 pub fn specular_lattice(
-    env: &PrefilteredEnvironment,
+    (env, sharp): (&PrefilteredEnvironment, Option<&SharpSource>),
     (brdf, fresnel, albedo): (&BrdfParams, &FresnelTable, &[[f32; 4]]),
     n: DVec3,
     v: DVec3,
@@ -426,6 +442,28 @@ pub fn specular_lattice(
         true => ((reach / step).ceil() - 1.0).clamp(0.0, f64::from(LATTICE_MAX_HALF)) as i32,
         false => 0,
     };
+    let sharp = sharp.filter(|_| beta < env.betas.get(1).copied().unwrap_or(0.0));
+    let sharp_share = match (sharp, step > 0.0) {
+        (Some(_), true) => sharp_share(reach / step),
+        (Some(_), false) => 1.0,
+        (None, _) => 0.0,
+    };
+    let read = |s: DVec3, _| {
+        let layers = || layered_radiance(env, s, beta);
+        match sharp.filter(|_| sharp_share > 0.0) {
+            None => layers(),
+            Some(source) => {
+                let sharp = sharp_radiance(env, source, s, beta);
+                match sharp_share < 1.0 {
+                    true => {
+                        let layers = layers();
+                        std::array::from_fn(|c| layers[c] + (sharp[c] - layers[c]) * sharp_share)
+                    }
+                    false => sharp,
+                }
+            }
+        }
+    };
     let mut sums = LookupSums::default();
     for i in -half..=half {
         let slope = f64::from(i) * step;
@@ -434,9 +472,41 @@ pub fn specular_lattice(
             false => 1.0,
         };
         let h = (tangent * slope + n).normalize();
-        sums.add(env, fresnel, (n, v, nv), h, gauss, |_| beta);
+        sums.add_read(fresnel, (n, v, nv), h, gauss, read);
     }
     sums.normalized(albedo, nv)
+}
+
+/// The lattice's share of sharp reads for its node count `reach/step` ([`SHARP_NODES`]): 1 up
+/// to the first, 0 from the second, linear between.
+pub fn sharp_share(nodes: f64) -> f64 {
+    let (all, none) = SHARP_NODES;
+    ((none - nodes) / (none - all)).clamp(0.0, 1.0)
+}
+
+/// A lookup at β below layer 1's β_1 from the map's own pixels ([`SharpSource`]): their Gaussian
+/// at β, or where β is wider than a read there may be ([`SharpSource::widest_beta`]), the widest
+/// read blended with layer 1 in variance as [`layered_radiance`] blends two layers.
+pub fn sharp_radiance(
+    env: &PrefilteredEnvironment,
+    source: &SharpSource,
+    d: DVec3,
+    beta: f64,
+) -> [f64; 3] {
+    let beta1 = env.betas[1];
+    let widest = source.widest_beta(d);
+    let b = beta.min(widest);
+    if b.is_nan() || b <= 0.0 {
+        // At a pole's very point the map has no columns to read.
+        return layered_radiance(env, d, beta);
+    }
+    let sharp = source.radiance(d, b);
+    if beta <= b {
+        return sharp;
+    }
+    let t = (beta * beta - b * b) / (beta1 * beta1 - b * b);
+    let layer1 = cube_bilinear(&env.layers[1], d);
+    std::array::from_fn(|c| sharp[c] + (layer1[c] - sharp[c]) * t)
 }
 
 /// The specular part of the `brdf` model for a wider lobe, by a grid of Beckmann slopes whose
@@ -668,6 +738,10 @@ pub struct BrdfSources<'a> {
     pub rough_lights: &'a [BrightLight],
     /// The rough split's blocks' size (radians, `BrightSplit::block_angle`).
     pub rough_block_angle: f64,
+    /// The two residuals' own pixels for the lattice's sharp reads (`None` for a map too wide
+    /// for them, or without them: the layers alone).
+    pub sharp: Option<&'a SharpSource>,
+    pub rough_sharp: Option<&'a SharpSource>,
 }
 
 impl<'a> BrdfSources<'a> {
@@ -679,6 +753,8 @@ impl<'a> BrdfSources<'a> {
             rough_residual: env,
             rough_lights: &[],
             rough_block_angle: 0.0,
+            sharp: None,
+            rough_sharp: None,
         }
     }
 }
@@ -708,8 +784,11 @@ pub fn brdf_specular(
         false => (sources.residual, 0.0),
     };
     let (lattice_residual, rough_share) = match lattice_rough {
-        true => (sources.rough_residual, rough_share + shares[0]),
-        false => (sources.residual, rough_share),
+        true => (
+            (sources.rough_residual, sources.rough_sharp),
+            rough_share + shares[0],
+        ),
+        false => ((sources.residual, sources.sharp), rough_share),
     };
     let mut lookups = [0.0; 3];
     let mut add = |share: f64, quadrature: &dyn Fn() -> [f64; 3]| {

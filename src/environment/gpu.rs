@@ -17,6 +17,7 @@ use super::params::{
     equirect_supersample, EnvironmentLight, EnvironmentModel, LayerPlan, PrefilterParams,
     LOBE_CUTOFF, MAX_FACE_SIZE, MIN_LAYER_FACE,
 };
+use super::sharp_source::SharpSource;
 use crate::gpu::shaders::interface::{
     BlurLayerParams, DownsampleParams, EquirectToCubeParams, IrradianceParams, LayerApronParams,
     NearHeader, NEAR_TEXELS_BINDING, PREFILTER_DEST_BINDING, PREFILTER_SOURCE_BINDING,
@@ -119,36 +120,68 @@ pub struct BrightEnvironment {
     rough_lights: Vec<BrightLight>,
     /// The rough split's blocks' size (radians, `BrightSplit::block_angle`).
     rough_block_angle: f64,
-    /// The residual's layer texels, then the rough residual's: [`BrightEnvironment::texels`].
+    /// Both residuals' own pixels for the lattice's sharp reads (sharp_source.rs), or none.
+    sharp: Option<[SharpSource; 2]>,
+    /// The residual's layer texels, then the rough residual's, then their pixels:
+    /// [`BrightEnvironment::texels`].
     texels: std::sync::OnceLock<Buffer>,
 }
 
 impl BrightEnvironment {
-    /// The two splits of one map (the rough one with its blocks' size). Both residuals must have
-    /// the same layers (β and face sizes): the lookups read them through one layer table.
+    /// The two splits of one map (the rough one with its blocks' size), with both residuals' own
+    /// pixels for the sharp reads (`None`: the layers alone). Both residuals must have the same
+    /// layers (β and face sizes), and their pixels the same size: the lookups read them through
+    /// one layer table.
     pub fn new(
         (residual, lights): (GpuEnvironment, Vec<BrightLight>),
         (rough_residual, rough_lights, rough_block_angle): (GpuEnvironment, Vec<BrightLight>, f64),
+        sharp: Option<[SharpSource; 2]>,
     ) -> Result<Self> {
         same_layers(&residual, &rough_residual, "the rough split's residual")?;
+        if let Some([a, b]) = &sharp {
+            if (a.width, a.height, a.rotation_deg) != (b.width, b.height, b.rotation_deg) {
+                return Err(Error::Internal(
+                    "the two residuals' sharp sources differ in size or rotation".into(),
+                ));
+            }
+        }
         Ok(Self {
             residual,
             lights,
             rough_residual,
             rough_lights,
             rough_block_angle,
+            sharp,
             texels: std::sync::OnceLock::new(),
         })
     }
 
-    /// The residual's and then the rough residual's layer texels in one texel buffer, made on
-    /// first use and kept.
+    /// The residual's and then the rough residual's layer texels in one texel buffer, then their
+    /// pixels, made on first use and kept.
     fn texels(&self, gpu: &GpuContext, apron: &LayerApronPass) -> Result<&Buffer> {
+        let pixels: Vec<&[[u32; 4]]> = self
+            .sharp
+            .iter()
+            .flatten()
+            .map(|source| &source.texels[..])
+            .collect();
         kept_texels(
             &self.texels,
             (gpu, apron),
-            &[&self.residual, &self.rough_residual],
+            (&[&self.residual, &self.rough_residual], &pixels),
         )
+    }
+
+    /// Where the sharp sources' pixels start in [`texels`](Self::texels), and their size.
+    fn sharp_layout(&self) -> Option<SharpLayout> {
+        let [residual, rough] = self.sharp.as_ref()?;
+        let layers = 2 * layer_texel_offsets(self.residual.layer_faces()).1;
+        Some(SharpLayout {
+            first_texel: [layers, layers + residual.texels.len() as u64],
+            width: rough.width,
+            height: rough.height,
+            rotation_deg: rough.rotation_deg,
+        })
     }
 }
 
@@ -180,6 +213,18 @@ pub struct BrdfLights<'a> {
     pub rough_lights: &'a [BrightLight],
     pub rough_first_texel: u64,
     pub rough_block_angle: f64,
+    /// Where the residuals' own pixels are, for the lattice's sharp reads (none: layers alone).
+    pub sharp: Option<SharpLayout>,
+}
+
+/// The residuals' own pixels in the `brdf` model's texel buffer (sharp_source.rs): the first
+/// texel of the residual's and of the rough residual's, the map's size, and its rotation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SharpLayout {
+    pub first_texel: [u64; 2],
+    pub width: u32,
+    pub height: u32,
+    pub rotation_deg: f64,
 }
 
 /// The index of each layer's first texel when the layers of `faces` are stored one after the
@@ -270,6 +315,7 @@ impl GpuEnvironment {
                 rough_lights: &bright.rough_lights,
                 rough_first_texel: layer_texel_offsets(bright.residual.layer_faces()).1,
                 rough_block_angle: bright.rough_block_angle,
+                sharp: bright.sharp_layout(),
             },
             // The map itself for both splits: whichever the lattice reads, the same layers.
             None => BrdfLights {
@@ -277,6 +323,7 @@ impl GpuEnvironment {
                 rough_lights: &[],
                 rough_first_texel: 0,
                 rough_block_angle: 0.0,
+                sharp: None,
             },
         }
     }
@@ -291,7 +338,7 @@ impl GpuEnvironment {
     /// `apron` on first use and kept. Refused when the device's texel buffers cannot hold them
     /// all.
     pub fn layer_texels(&self, gpu: &GpuContext, apron: &LayerApronPass) -> Result<&Buffer> {
-        kept_texels(&self.layer_texels, (gpu, apron), &[self])
+        kept_texels(&self.layer_texels, (gpu, apron), (&[self], &[]))
     }
 }
 
@@ -320,12 +367,12 @@ impl LayerApronPass {
 fn kept_texels<'a>(
     kept: &'a std::sync::OnceLock<Buffer>,
     (gpu, apron): (&GpuContext, &LayerApronPass),
-    envs: &[&GpuEnvironment],
+    parts: (&[&GpuEnvironment], &[&[[u32; 4]]]),
 ) -> Result<&'a Buffer> {
     if let Some(buffer) = kept.get() {
         return Ok(buffer);
     }
-    let _ = kept.set(concatenated_texels(gpu, apron, envs)?);
+    let _ = kept.set(concatenated_texels(gpu, apron, parts)?);
     kept.get()
         .ok_or_else(|| Error::Internal("the layer texel buffer was not kept".into()))
 }
@@ -333,16 +380,19 @@ fn kept_texels<'a>(
 /// The layers of `envs`, one environment after the other, in one device-local texel buffer
 /// (layer k of the first from `layer_texel_offsets(layer_faces())[k]`): copied from the images
 /// into a buffer face after face, then written with their aprons by `apron` (twin:
-/// `brdf_quadrature::apron_texels`). Refused when the device's texel buffers cannot hold them
-/// all.
+/// `brdf_quadrature::apron_texels`), and after them the texels of `pixels` (the residuals' own,
+/// sharp_source.rs) copied from the host. Refused when the device's texel buffers cannot hold
+/// them all.
 fn concatenated_texels(
     gpu: &GpuContext,
     apron: &LayerApronPass,
-    envs: &[&GpuEnvironment],
+    (envs, pixels): (&[&GpuEnvironment], &[&[[u32; 4]]]),
 ) -> Result<Buffer> {
     let layers: Vec<&Image> = envs.iter().flat_map(|env| env.layers.iter()).collect();
     let faces: Vec<u32> = layers.iter().map(|image| image.desc().width).collect();
-    let (offsets, total) = layer_texel_offsets(faces.iter().copied());
+    let (offsets, layer_total) = layer_texel_offsets(faces.iter().copied());
+    let pixel_texels: Vec<[u32; 4]> = pixels.concat();
+    let total = layer_total + pixel_texels.len() as u64;
     let (sources, source_total) = texel_offsets(faces.iter().copied());
     let limit = u64::from(gpu.info().max_texel_buffer_elements).min(i32::MAX as u64);
     if total > limit {
@@ -364,8 +414,23 @@ fn concatenated_texels(
     let buffer = gpu.create_buffer(BufferDesc::device_local(
         "environment layer texels",
         total * 16,
-        BufferUsage::UNIFORM_TEXEL | BufferUsage::STORAGE_TEXEL | BufferUsage::TRANSFER_SRC,
+        BufferUsage::UNIFORM_TEXEL
+            | BufferUsage::STORAGE_TEXEL
+            | BufferUsage::TRANSFER_SRC
+            | BufferUsage::TRANSFER_DST,
     ))?;
+    let staged = match pixel_texels.is_empty() {
+        true => None,
+        false => {
+            let mut staging = gpu.create_buffer(BufferDesc::upload(
+                "environment residual pixels (staging)",
+                pixel_texels.len() as u64 * 16,
+                BufferUsage::TRANSFER_SRC,
+            ))?;
+            staging.write(&pixel_texels)?;
+            Some(staging)
+        }
+    };
     let set = gpu.create_descriptor_set(
         apron.pipeline.layout(),
         &[
@@ -396,6 +461,14 @@ fn concatenated_texels(
             };
             rec.push_constants(&apron.pipeline, bytemuck::bytes_of(&constants));
             rec.dispatch(groups(face_size + 2), groups(face_size + 2), 6);
+        }
+        if let Some(staging) = &staged {
+            // After every layer's texels: other bytes than the apron pass writes, but a texel
+            // buffer's shader writes are tracked over its whole range, so the copy waits.
+            rec.memory_barrier(Access::ComputeShaderWrite, Access::TransferWrite);
+            rec.copy_buffer_at(staging, &buffer, layer_total * 16);
+            rec.memory_barrier(Access::TransferWrite, Access::GraphicsShaderRead);
+            rec.memory_barrier(Access::TransferWrite, Access::ComputeShaderRead);
         }
         // The draws (and the compute evaluator) that read the buffer are later submits; the
         // barriers make the pass's writes visible to their shaders.

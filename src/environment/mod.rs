@@ -29,6 +29,7 @@ pub mod oracle;
 pub mod params;
 pub mod prepare;
 pub mod preview;
+pub mod sharp_source;
 
 pub use image::{CubeImage, Equirect, PrefilteredEnvironment};
 pub use load::{load_environment, LoadedEnvironment};

@@ -23,6 +23,7 @@ use super::gpu::{model_params, BrightEnvironment, GpuEnvironment, GpuPrefilter};
 use super::image::Equirect;
 use super::load::{load_environment, LoadedEnvironment};
 use super::params::{EnvironmentLight, EnvironmentModel, PrefilterParams};
+use super::sharp_source::SharpSource;
 use crate::gpu::GpuContext;
 use crate::{Result, Warning};
 
@@ -187,13 +188,18 @@ impl EnvironmentPreparer {
         warnings: &mut Vec<Warning>,
     ) -> Result<BrightEnvironment> {
         let params = model_params(gpu, image.width, model);
+        let (first, rough) = (split_bright(image), split_bright_rough(image));
+        // The lattice's sharp reads of both residuals' pixels, where the map is narrow enough.
+        let sharp = SharpSource::new(&first.residual, light)
+            .zip(SharpSource::new(&rough.residual, light))
+            .map(|(a, b)| [a, b]);
         let mut part = |split: BrightSplit| -> Result<(GpuEnvironment, Vec<BrightLight>, f64)> {
             let lights = split.lights_in_world(light);
             let residual = self.prepare_image(gpu, &split.residual, (light, &params), warnings)?;
             Ok((residual, lights, split.block_angle))
         };
-        let (residual, lights, _) = part(split_bright(image))?;
-        BrightEnvironment::new((residual, lights), part(split_bright_rough(image))?)
+        let (residual, lights, _) = part(first)?;
+        BrightEnvironment::new((residual, lights), part(rough)?, sharp)
     }
 
     fn prepare_image(

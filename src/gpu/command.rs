@@ -395,6 +395,20 @@ impl Recorder<'_> {
         };
     }
 
+    /// Copies all of `src` into `dst` from byte `dst_offset`.
+    pub fn copy_buffer_at(&mut self, src: &Buffer, dst: &Buffer, dst_offset: u64) {
+        let region = vk::BufferCopy {
+            src_offset: 0,
+            dst_offset,
+            size: src.size().min(dst.size().saturating_sub(dst_offset)),
+        };
+        // SAFETY: recording; both buffers are live and the region fits both.
+        unsafe {
+            self.device
+                .cmd_copy_buffer(self.cmd, src.raw, dst.raw, std::slice::from_ref(&region))
+        };
+    }
+
     /// Fills every layer of `image` (in TransferDst layout) from `buffer`, tightly packed layer
     /// after layer, row 0 first: the inverse of `copy_image_to_buffer`.
     pub fn copy_buffer_to_image(&mut self, buffer: &Buffer, image: &Image) {

@@ -290,6 +290,15 @@ shader_interface! {
             /// of its lights' direction bins at `FRESNEL_KNOTS_BINDING` (environment/
             /// light_bins.rs).
             env_rough: ivec4,
+            /// The lattice's sharp reads of the residuals' own pixels (environment/
+            /// sharp_source.rs): x the first texel of the residual's pixels at
+            /// `ENV_LAYER_TEXELS_BINDING` (after every layer), y the rough residual's (−1: none,
+            /// the layers alone), z the map's width, w its height.
+            env_sharp: ivec4,
+            /// x `SHARP_SIGMA`, y `SHARP_REACH`, z and w `SHARP_NODES`; the environment's rotation
+            /// is `env_sharp_rotation` (cos ρ, sin ρ).
+            env_sharp_read: vec4,
+            env_sharp_rotation: vec4,
             env_rough_light_direction: [vec4; ROUGH_MAX_ENV_LIGHTS],
             env_rough_light_irradiance: [vec4; ROUGH_MAX_ENV_LIGHTS],
         }

@@ -179,6 +179,13 @@ impl Frame {
                 grid.max_half as f32,
             ]
         };
+        let (all, none) = crate::environment::sharp_source::SHARP_NODES;
+        self.env_sharp_read = [
+            crate::environment::sharp_source::SHARP_SIGMA as f32,
+            crate::environment::sharp_source::SHARP_REACH as f32,
+            all as f32,
+            none as f32,
+        ];
         self.env_grid = pack(&q::GRID);
         self.env_variate_grid = pack(&q::VARIATE_GRID);
         let grazing = &q::GRID_GRAZING;
@@ -212,6 +219,20 @@ impl Frame {
             ) = pack_light(light);
         }
         self.env_lattice_share[1] = rough_lattice_m(lights.rough_block_angle);
+        // The texel buffer holds at most i32::MAX texels (`concatenated_texels`).
+        let texel = |first: u64| first.min(i32::MAX as u64) as i32;
+        (self.env_sharp, self.env_sharp_rotation) = match lights.sharp {
+            Some(sharp) => {
+                let (sin, cos) = sharp.rotation_deg.to_radians().sin_cos();
+                let [first, rough] = sharp.first_texel.map(texel);
+                let size = |n: u32| n.min(i32::MAX as u32) as i32;
+                (
+                    [first, rough, size(sharp.width), size(sharp.height)],
+                    [cos as f32, sin as f32, 0.0, 0.0],
+                )
+            }
+            None => ([-1, -1, 0, 0], [1.0, 0.0, 0.0, 0.0]),
+        };
     }
 
     /// Appends the direction bins of the packed rough lights (environment/light_bins.rs) to the
