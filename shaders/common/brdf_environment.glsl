@@ -451,8 +451,8 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
     // Every node reads the same blur: its layers, their texels and the blend found once.
     LayerPair pair = layer_pair_texels(beta, base);
     // Below layer 1's β the residual's own pixels, by the node count's share (twin:
-    // `sharp_share`), in a loop of its own: beside the layers' loop its reads cost every other
-    // pixel of the draw ~5 % (BENCHMARKS.md).
+    // `sharp_share`), in a loop of its own: inline in the layers' loop they cost the default
+    // scene's `brdf` draw, which reads none of them, about 5 % (BENCHMARKS.md).
     vec4 read = frame.env_sharp_read;
     float sharp_share = frame.env_sharp.z > 0 && beta < layer_beta(1)
         ? (step > 0.0 ? clamp((read.w - reach / step) / (read.w - read.z), 0.0, 1.0) : 1.0)

@@ -33,7 +33,8 @@ use super::params::EnvironmentLight;
 use crate::oracle::visible_normals::erfc_positive;
 
 /// The widest Gaussian a sharp read takes, in the map's pixels (rows, and columns where they
-/// are narrower than rows): 1, so that a read at `SHARP_REACH` = 3 covers at most 7 × 7 pixels.
+/// are narrower than rows): 1, so that a read at `SHARP_REACH` = 3 covers at most 7 rows of 4
+/// texels.
 /// On the 112 points at m = 0.02 0.7 of β_1 (6 mrad at 1k, one pixel) and all of it
 /// (8.6 mrad) measured the same (studio 0.52 / 6.0 % and 0.50 / 6.0 %), 0.5 of it worse (0.68 /
 /// 7.0 %).
@@ -44,8 +45,9 @@ pub const SHARP_SIGMA: f64 = 1.0;
 pub const SHARP_REACH: f64 = 3.0;
 
 /// The widest map the sharp reads serve: 4096 pixels, whose two residuals take 2 × 64 MiB of
-/// texels. Wider maps have layer 0 at face 1024 and more (texels of 1.5 mrad and less), whose read
-/// resolves such a lobe.
+/// texels. Wider maps keep the layers alone: their pixels are under 1.5 mrad, a third of the lobe
+/// across the plane at m = 0.02 and N·V = 0.15, and their residuals would take 2 × 128 MiB and
+/// more.
 pub const SHARP_MAX_WIDTH: u32 = 4096;
 
 /// The lattice's sharp reads, blended out by its node count: all of them up to
