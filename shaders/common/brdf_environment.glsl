@@ -390,6 +390,14 @@ vec3 sharp_radiance(int first, vec3 d, float beta, LayerPair pair, LayerPair lay
     return sharp + (layer - sharp) * t;
 }
 
+// A lattice node's weight at Beckmann slope `slope`: the Gaussian of the in-plane spread σ_p,
+// tapered at the reach; 1 at normal incidence, where σ_p is 0 (twin: `specular_lattice`).
+float lattice_node_weight(float slope, float sigma_p, float reach) {
+    return sigma_p > 0.0
+        ? exp(-0.5 * (slope / sigma_p) * (slope / sigma_p)) * lattice_taper(abs(slope) / reach)
+        : 1.0;
+}
+
 // `specular_lattice`'s nodes where it reads the residual's own pixels (by `shape.w`, the node
 // count's share of them, the layers of `pair` the rest): `along` its plane's tangent and step,
 // `shape` its σ_p, reach, β.
@@ -407,9 +415,7 @@ vec3 sharp_lattice(LacquerParams p, vec3 n, vec3 v, float nv, vec4 along, vec4 s
     vec3 weights = vec3(0.0);
     for (int i = -half_count; i <= half_count; ++i) {
         float slope = float(i) * along.w;
-        float gauss = sigma_p > 0.0
-            ? exp(-0.5 * (slope / sigma_p) * (slope / sigma_p)) * lattice_taper(abs(slope) / reach)
-            : 1.0;
+        float gauss = lattice_node_weight(slope, sigma_p, reach);
         vec3 h = normalize(along.xyz * slope + n);
         float vh = dot(v, h);
         vec3 s;
@@ -465,9 +471,7 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
     vec3 weights = vec3(0.0);
     for (int i = -half_count; i <= half_count; ++i) {
         float slope = float(i) * step;
-        float gauss = sigma_p > 0.0
-            ? exp(-0.5 * (slope / sigma_p) * (slope / sigma_p)) * lattice_taper(abs(slope) / reach)
-            : 1.0;
+        float gauss = lattice_node_weight(slope, sigma_p, reach);
         vec3 h = normalize(tangent * slope + n);
         float vh = dot(v, h);
         if (gauss > 0.0 && vh > 0.0) {
