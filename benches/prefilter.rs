@@ -73,6 +73,7 @@ fn bench(
         beta_min: 0.02,
         beta_max: 1.0,
         layer_texel: 1.0,
+        small_layer_texel: 1.0,
         fine_layers: 0,
         blur_net_of_read: false,
     };

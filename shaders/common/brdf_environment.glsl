@@ -398,6 +398,19 @@ float lattice_node_weight(float slope, float sigma_p, float reach) {
         : 1.0;
 }
 
+// The mean direction of the reflections of v about h tilted across the plane of incidence by
+// slopes of variance `variance` (twin: `across_mean`, whose doc derives it), not normalised: the
+// layers' face selection divides by the major axis (`select_face`), so only the sharp reads,
+// which take angles, normalise it.
+vec3 across_mean(vec3 s, vec3 h, float vh, float variance) {
+    return s - 2.0 * vh * variance * h;
+}
+
+// The across-the-plane slope variance about a lattice node's h (twin: `lattice_across_variance`).
+float lattice_across_variance(float sigma, float nh) {
+    return frame.env_lattice_across.x * sigma * sigma * nh * nh;
+}
+
 // `specular_lattice`'s nodes where it reads the residual's own pixels (by `shape.w`, the node
 // count's share of them, the layers of `pair` the rest): `along` its plane's tangent and step,
 // `shape` its σ_p, reach, β.
@@ -407,6 +420,7 @@ vec3 sharp_lattice(LacquerParams p, vec3 n, vec3 v, float nv, vec4 along, vec4 s
     float reach = shape.y;
     float beta = shape.z;
     float sharp_share = shape.w;
+    float sigma = p.beckmann_m * 0.70710678;
     int first = base == 0 ? frame.env_sharp.x : frame.env_sharp.y;
     // Layer 1 alone, for the widest read's blend with it.
     LayerPair layer1 = LayerPair(frame.layer_face_size[0][1], base + frame.layer_first_texel[0][1],
@@ -421,6 +435,7 @@ vec3 sharp_lattice(LacquerParams p, vec3 n, vec3 v, float nv, vec4 along, vec4 s
         vec3 s;
         vec3 weight;
         if (gauss > 0.0 && vh > 0.0 && lookup_weight(p, n, v, nv, h, vh, gauss, s, weight)) {
+            s = normalize(across_mean(s, h, vh, lattice_across_variance(sigma, dot(n, h))));
             vec3 radiance = sharp_radiance(first, s, beta, pair, layer1);
             if (sharp_share < 1.0) {
                 vec3 layers = layered_radiance_pair(s, pair);
@@ -435,7 +450,8 @@ vec3 sharp_lattice(LacquerParams p, vec3 n, vec3 v, float nv, vec4 along, vec4 s
 
 // The narrow-lobe quadrature (twin: `specular_lattice`, whose doc derives it): nodes on the plane
 // of incidence at Beckmann slopes i·step, each read at the blur β that supplies the lobe's width
-// across the plane, weighted by the Gaussian of the rest of the in-plane spread.
+// across the plane, about the mean of its reflections across the plane (`across_mean`), weighted
+// by the Gaussian of the rest of the in-plane spread.
 vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
     vec3 tangent, bitangent;
     incidence_frame(n, v, nv, tangent, bitangent);
@@ -474,8 +490,12 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
         float gauss = lattice_node_weight(slope, sigma_p, reach);
         vec3 h = normalize(tangent * slope + n);
         float vh = dot(v, h);
-        if (gauss > 0.0 && vh > 0.0) {
-            add_lookup_pair(p, n, v, nv, h, vh, gauss, pair, sum, weights);
+        vec3 s;
+        vec3 weight;
+        if (gauss > 0.0 && vh > 0.0 && lookup_weight(p, n, v, nv, h, vh, gauss, s, weight)) {
+            s = across_mean(s, h, vh, lattice_across_variance(sigma, dot(n, h)));
+            sum += weight * layered_radiance_pair(s, pair);
+            weights += weight;
         }
     }
     return normalized_lookups(p, nv, sum, weights);

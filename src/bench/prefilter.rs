@@ -50,6 +50,7 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<PrefilterBench> {
         beta_min: 0.02,
         beta_max: 1.0,
         layer_texel: 1.0,
+        small_layer_texel: 1.0,
         fine_layers: 0,
         blur_net_of_read: false,
     };

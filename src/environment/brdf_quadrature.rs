@@ -251,9 +251,27 @@ pub const LATTICE_MAX_HALF: u32 = 24;
 /// incidence the blur's step (2·nv·σ) outgrows σ_p, and the ±1 nodes fell outside the reach: one
 /// lookup, and the in-plane variance σ_p² the blur does not supply was lost (dark points beside
 /// the courtyard's bright sky read −25 %, its board at 60° was 9.9 % off at m = 0.05). At √3·σ_p
-/// the three nodes carry Gaussian weights close to the 3-point Gauss–Hermite rule's (1/6, 2/3,
-/// 1/6), which has the variance and the fourth moment of the Gaussian: that board 1.4 %.
-pub const LATTICE_MAX_STEP: f64 = 1.732_050_807_568_877_2;
+/// the three nodes carried Gaussian weights close to the 3-point Gauss–Hermite rule's (1/6, 2/3,
+/// 1/6), which has the variance and the fourth moment of the Gaussian: that board 1.4 %. Since
+/// the reach went to 4σ_p the ±2 nodes are inside it too, and at √3 (3.46σ_p) they fell in the
+/// taper, which starts at 3.2σ_p and took a quarter of their weight: the nodes' spread fell short
+/// of σ_p, and the courtyard board seen 45° from its normal read 1.49 / 6.7 % at m = 0.05 (mean /
+/// p99), 1.15 / 4.9 % at 1.4 (with exact lookups 1.12 / 4.9 and 0.87 / 2.8 %). At 1.4 they lie at
+/// 2.8σ_p; from 4/3 up to √3 the reach holds the same five nodes, so the step costs nothing.
+pub const LATTICE_MAX_STEP: f64 = 1.4;
+/// The share of the lobe's across-the-plane spread whose mean reflection each lattice node reads
+/// ([`across_mean`], [`lattice_across_variance`]). A node's lookup is isotropic about its mirror
+/// direction s, as if tilting h across the plane swung s along a great circle; it swings s along
+/// a small circle, towards the horizon by 2(V·H)·q² for a tilt q, so the lobe's mass across the
+/// plane lies below s. At a share of 1 (its mean, to second order) the lattice with exact lookups
+/// read the courtyard board seen 45° from its normal at m = 0.05 (dark roofs under a bright sky,
+/// all of it the residual's) at 0.23 / 1.8 % (mean / p99) instead of 0.87 / 2.8 %. But at 1 two
+/// dark points of the 112 whose light is 4–6σ out in the lobe's tails at 1,000:1 read +5.1 and
+/// +5.2 % (+3.3, +2.6 % without): the lookups at the nodes towards the horizon are as wide across
+/// as the lobe at its centre, wider than it is there (the across Jacobian 2(V·H)(N·H) shrinks),
+/// and moving them down moves those tails nearer the light. 0.7 keeps both under 5 % and most of
+/// the gain (BENCHMARKS.md, "The lobe across the plane is curved").
+pub const LATTICE_ACROSS_MEAN: f64 = 0.7;
 /// The share of the reach over which the node weights fall to 0 ([`lattice_taper`]; the lattice
 /// and the grid).
 pub const LATTICE_TAPER: f64 = 0.2;
@@ -408,8 +426,9 @@ fn smoothstep01(t: f64) -> f64 {
 /// `LATTICE_SPACING`·β/2 apart (at most `LATTICE_MAX_STEP`·σ_p), weighted by the Gaussian of the
 /// rest of the in-plane variance,
 /// σ_p² = σ² − (β/2)²,
-/// times F·G·(V·H)/(nv·nh) (`lattice_taper` at the reach). At normal incidence that is one
-/// lookup; towards grazing, more (at most 2·`LATTICE_MAX_HALF` + 1, the spacing and blur growing
+/// times F·G·(V·H)/(nv·nh) (`lattice_taper` at the reach). Each node reads about the mean of
+/// its reflections across the plane, not its mirror direction ([`across_mean`],
+/// [`LATTICE_ACROSS_MEAN`]). At normal incidence that is one lookup; towards grazing, more (at most 2·`LATTICE_MAX_HALF` + 1, the spacing and blur growing
 /// past that). Below layer 1's β the nodes read the residual's own pixels instead
 /// ([`sharp_radiance`], where `sharp` has them), as far as the lattice's node count allows
 /// ([`sharp_share`]). Normalised by A(nv) like [`specular_quadrature`].
@@ -472,9 +491,30 @@ pub fn specular_lattice(
             false => 1.0,
         };
         let h = (tangent * slope + n).normalize();
-        sums.add_read(fresnel, (n, v, nv), h, gauss, read);
+        let across = lattice_across_variance(sigma, n.dot(h));
+        sums.add_read(fresnel, (n, v, nv), h, gauss, |s, vh| {
+            read(across_mean(s, h, vh, across), vh)
+        });
     }
     sums.normalized(albedo, nv)
+}
+
+/// The across-the-plane slope variance whose mean reflection a lattice node at half vector h
+/// reads ([`across_mean`]): [`LATTICE_ACROSS_MEAN`]·σ²·(N·H)². The Beckmann slopes are taken
+/// from N: n + t·p + b·q_N is h·√(1 + p²) + b·q_N, so about the unit h the tilt is q = q_N·(N·H),
+/// of variance σ²·(N·H)².
+pub fn lattice_across_variance(sigma: f64, nh: f64) -> f64 {
+    LATTICE_ACROSS_MEAN * sigma * sigma * nh * nh
+}
+
+/// The mean direction of the reflections s of V about the half vectors h + b·q, b across the
+/// plane of incidence and q of variance `variance` (twin of brdf_environment.glsl's
+/// `across_mean`). Tilting h across the plane swings s along a small circle about the plane's
+/// tangent, not a great circle: s = (2(V·H)(h + b·q) − (1 + q²)V)/(1 + q²), so their mean is
+/// s − 2(V·H)·E[q²]·h to second order, normalised. An isotropic lookup about s itself is that
+/// far off the lobe's centre of mass.
+pub fn across_mean(s: DVec3, h: DVec3, vh: f64, variance: f64) -> DVec3 {
+    (s - 2.0 * vh * variance * h).normalize()
 }
 
 /// The lattice's share of sharp reads for its node count `reach/step` ([`SHARP_NODES`]): 1 up
@@ -938,6 +978,43 @@ mod tests {
             fibonacci_point(3, 4),
             (0.875, 0.854_101_966_249_684_5)
         ));
+    }
+
+    #[test]
+    fn a_lattice_node_reads_the_mean_of_its_reflections_across_the_plane() {
+        // Brute force: the Beckmann slopes across the plane, q_N ~ N(0, σ²) from N, at a node of
+        // slope p along it; the mean of the reflections of V about n + t·p + b·q_N, by a midpoint
+        // sum over ±8σ. `across_mean` at the full variance agrees to O(σ⁴) (σ⁴ = 1.6e-6 here;
+        // 2.6e-6 rad at worst); the mirror direction itself is O(σ²) away (7e-4 rad at θ_V = 0.3,
+        // so a factor or a sign off in the mean would be 3e-4 and more).
+        let sigma = 0.05 / std::f64::consts::SQRT_2;
+        let n = DVec3::Z;
+        for (theta_v, p) in [(0.3_f64, 0.0), (0.8, 0.04), (1.2, -0.06), (1.45, 0.02)] {
+            let v = DVec3::new(theta_v.sin(), 0.0, theta_v.cos());
+            let (t, b) = (DVec3::X, DVec3::Y);
+            let reflect = |h: DVec3| {
+                let h = h.normalize();
+                2.0 * v.dot(h) * h - v
+            };
+            let steps = 4000;
+            let mut mean = DVec3::ZERO;
+            for i in 0..steps {
+                let q = sigma * 16.0 * ((f64::from(i) + 0.5) / f64::from(steps) - 0.5);
+                mean += (-0.5 * (q / sigma).powi(2)).exp() * reflect(n + t * p + b * q);
+            }
+            let want = mean.normalize();
+            let h = (n + t * p).normalize();
+            let (vh, s) = (v.dot(h), reflect(h));
+            let variance = lattice_across_variance(sigma, n.dot(h)) / LATTICE_ACROSS_MEAN;
+            let got = across_mean(s, h, vh, variance);
+            let angle = |a: DVec3, b: DVec3| a.cross(b).length().atan2(a.dot(b));
+            assert!(
+                angle(got, want) < 1e-5,
+                "θ_V {theta_v}: {}",
+                angle(got, want)
+            );
+            assert!(angle(s, want) > 2e-4, "θ_V {theta_v}: {}", angle(s, want));
+        }
     }
 
     #[test]

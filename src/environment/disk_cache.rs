@@ -65,6 +65,13 @@ impl CacheKey {
         ] {
             hash.update(x.to_bits().to_le_bytes());
         }
+        // Every layer as planned, so that a change to the rule that sizes or blurs them (as
+        // `small_layer_texel` was) is a new key and not a stale file.
+        for layer in params.plan() {
+            hash.update(layer.beta.to_bits().to_le_bytes());
+            hash.update(layer.blur.to_bits().to_le_bytes());
+            hash.update(layer.face_size.to_le_bytes());
+        }
         CacheKey(hash.finalize().into())
     }
 
@@ -309,6 +316,7 @@ mod tests {
             beta_min: 0.5,
             beta_max: 1.0,
             layer_texel: 1.0,
+            small_layer_texel: 1.0,
             fine_layers: 0,
             blur_net_of_read: false,
         };
@@ -356,6 +364,7 @@ mod tests {
         assert_ne!(key, CacheKey::new(&source, &more_layers, light(1.0, 0.0)));
         let finer_layers = PrefilterParams {
             layer_texel: 0.5,
+            small_layer_texel: 0.5,
             ..params
         };
         assert_ne!(key, CacheKey::new(&source, &finer_layers, light(1.0, 0.0)));

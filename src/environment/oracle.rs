@@ -394,6 +394,7 @@ mod tests {
             beta_min: 0.02,
             beta_max: 1.0,
             layer_texel: 1.0,
+            small_layer_texel: 1.0,
             fine_layers: 0,
             blur_net_of_read: false,
         };
@@ -638,6 +639,7 @@ mod tests {
             beta_min: 0.5,
             beta_max: 0.5,
             layer_texel: 1.0,
+            small_layer_texel: 1.0,
             fine_layers: 0,
             blur_net_of_read: false,
         };

@@ -65,6 +65,10 @@ pub struct PrefilterParams {
     /// The widest a blurred layer's texel, (π/2)/M, may be as a share of the layer's β
     /// ([`layer_face_size`]): 1 for SPEC's `paper` layers, [`BRDF_LAYER_TEXEL`] for `brdf`'s.
     pub layer_texel: f64,
+    /// The finer texel (a share of β) a blurred layer gets where that keeps its face at most
+    /// [`SMALL_LAYER_FACE`] ([`layer_face_size`]): [`BRDF_SMALL_LAYER_TEXEL`] for `brdf`'s
+    /// layers; `layer_texel` itself (no change) for SPEC's `paper` layers.
+    pub small_layer_texel: f64,
     /// Layers between the sharp layer 0 and β_min: the series continued below β_min at its own
     /// ratio, β_min/r, β_min/r², … (the `brdf` model's [`BRDF_FINE_LAYERS`]); 0 for SPEC's
     /// series.
@@ -94,6 +98,19 @@ pub const BRDF_BLUR_NET_OF_READ: bool = true;
 /// from 2.45 to 5.75 s (BENCHMARKS.md, "Layers that resolve the lattice's blur").
 pub const BRDF_LAYER_TEXEL: f64 = 2.0 / 3.0;
 
+/// [`PrefilterParams::small_layer_texel`] of the `brdf` model's layers, up to faces of
+/// [`SMALL_LAYER_FACE`]. At 2/3 of β the layers at β 0.08–0.19 (faces of 16–32) read a dark
+/// point between bright patches up to 11.5 % too bright against the Gaussian of their β (the
+/// centre of the courtyard's sphere at m = 0.05, looking back at its camera): a bilinear read
+/// interpolates linearly over texels 0.6 β wide, above a convex dip, which no net blur undoes.
+/// At 0.4 of β those layers read within 1 %, and the sphere's pixels facing the camera went from
+/// 1.15 / 6.8 % to 1.09 / 5.2 % (mean / p99). A face of 64 costs the prefilter little beside
+/// layer 0's 256 (the window grows as the face squared, the texels too: 16× a face of 32).
+pub const BRDF_SMALL_LAYER_TEXEL: f64 = 0.4;
+
+/// The largest face [`PrefilterParams::small_layer_texel`] applies to.
+pub const SMALL_LAYER_FACE: u32 = 64;
+
 /// The `brdf` model's [`PrefilterParams::fine_layers`]. Its lookups narrower than β_min (the
 /// lattice across the plane of incidence at m ≤ 0.03, or towards grazing) blend the layers
 /// below it, and a blend of two blurs is a blur of the blended variance but not of a Gaussian's
@@ -122,6 +139,7 @@ impl PrefilterParams {
             beta_min: 0.02,
             beta_max: 1.0,
             layer_texel: 1.0,
+            small_layer_texel: 1.0,
             fine_layers: 0,
             blur_net_of_read: false,
         }
@@ -140,6 +158,7 @@ impl PrefilterParams {
             EnvironmentModel::Brdf => Self {
                 layers: BRDF_LAYERS,
                 layer_texel: BRDF_LAYER_TEXEL,
+                small_layer_texel: BRDF_SMALL_LAYER_TEXEL,
                 fine_layers: BRDF_FINE_LAYERS,
                 beta_max: BRDF_BETA_MAX,
                 blur_net_of_read: BRDF_BLUR_NET_OF_READ,
@@ -176,6 +195,16 @@ impl PrefilterParams {
                 "layer_texel",
                 self.layer_texel,
                 "must be in [0.25, 1] (a blurred layer's texel as a share of its β)",
+            ));
+        }
+        if !(0.25..=self.layer_texel).contains(&self.small_layer_texel) {
+            return Err(Error::invalid(
+                "small_layer_texel",
+                self.small_layer_texel,
+                format!(
+                    "must be in [0.25, layer_texel = {}] (a small layer's texel as a share of its β)",
+                    self.layer_texel
+                ),
             ));
         }
         if self.fine_layers + 2 > self.layers {
@@ -222,7 +251,11 @@ impl PrefilterParams {
                 let beta = self.beta(k);
                 let face_size = match k {
                     0 => self.face_size,
-                    _ => layer_face_size(beta, self.layer_texel, self.face_size),
+                    _ => {
+                        let small = layer_face_size(beta, self.small_layer_texel, self.face_size);
+                        let face = layer_face_size(beta, self.layer_texel, self.face_size);
+                        face.max(small.min(SMALL_LAYER_FACE))
+                    }
                 };
                 let blur = match self.blur_net_of_read && k > 0 {
                     true => (beta * beta - texel_read_variance(face_size))
@@ -499,6 +532,7 @@ mod tests {
             beta_min: 0.02,
             beta_max: 1.0,
             layer_texel: 1.0,
+            small_layer_texel: 1.0,
             fine_layers: 0,
             blur_net_of_read: false,
         };
@@ -509,17 +543,28 @@ mod tests {
     }
 
     #[test]
-    fn brdf_layers_have_a_texel_of_two_thirds_of_beta() {
+    fn brdf_layers_have_a_texel_of_two_thirds_of_beta_and_small_ones_finer() {
         let p = PrefilterParams::for_model(1024, EnvironmentModel::Brdf);
         let faces: Vec<u32> = p.plan().iter().map(|l| l.face_size).collect();
         // β_k = 0.02·38^((k−4)/13); M ≥ 1.5·(π/2)/β_k: the fine layers β_1..3 = 0.0086, 0.0114,
         // 0.0151 → 273, 206, 156 → 512, 256, 256, each clamped to N = 256; β_4 = 0.02 → 117.8 →
         // 128, β_5 = 0.0265 → 89.1 → 128, β_6 = 0.0350 → 67.3 → 128, β_7 = 0.0463 → 50.9 → 64,
-        // … β_12 = 0.188 → 12.6 → 16.
+        // β_8 = 0.0613 → 38.5 → 64, … β_12 = 0.188 → 12.6 → 16. Where M ≥ 2.5·(π/2)/β_k is at
+        // most 64 it is taken instead: β_9 = 0.081 → 48.5 → 64 (not 32), β_10 = 0.107 → 36.6 →
+        // 64, β_11 = 0.142 → 27.7 → 32, β_12 → 20.9 → 32 (not 16), β_13 = 0.248 → 15.8 → 16.
         assert_eq!(
             faces,
-            vec![256, 256, 256, 256, 128, 128, 128, 64, 64, 32, 32, 32, 16, 16, 16, 16, 16, 16]
+            vec![256, 256, 256, 256, 128, 128, 128, 64, 64, 64, 64, 32, 32, 16, 16, 16, 16, 16]
         );
+        // Every layer at 2/3 of β at most (but the fine layers, held at N), and at 0.4 of β
+        // unless that needs a face above `SMALL_LAYER_FACE` (layers 4–8, which keep 128 and 64).
+        for layer in &p.plan()[1..] {
+            let texel = std::f64::consts::FRAC_PI_2 / f64::from(layer.face_size);
+            assert!(texel <= BRDF_LAYER_TEXEL * layer.beta || layer.face_size == p.face_size);
+            assert!(
+                texel <= BRDF_SMALL_LAYER_TEXEL * layer.beta || layer.face_size >= SMALL_LAYER_FACE
+            );
+        }
         let paper = PrefilterParams::for_model(1024, EnvironmentModel::Paper);
         assert_eq!(paper, PrefilterParams::for_source_width(1024));
     }

@@ -36,6 +36,7 @@ fn small_params(face_size: u32) -> PrefilterParams {
         beta_min: 0.02,
         beta_max: 1.0,
         layer_texel: 1.0,
+        small_layer_texel: 1.0,
         fine_layers: 0,
         blur_net_of_read: false,
     }
@@ -723,6 +724,7 @@ fn step_one_reads_exactly_the_oracles_source_pixels() {
             beta_min: 1.0,
             beta_max: 1.0,
             layer_texel: 1.0,
+            small_layer_texel: 1.0,
             fine_layers: 0,
             blur_net_of_read: false,
         };

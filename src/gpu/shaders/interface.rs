@@ -282,6 +282,9 @@ shader_interface! {
             /// draw's largest up to `LATTICE_M_LO`); w: the lattice's widest node step in σ_p
             /// (`LATTICE_MAX_STEP`).
             env_lattice_share: vec4,
+            /// x: the share of the lobe's across-the-plane spread whose mean reflection each
+            /// lattice node reads (brdf_quadrature.rs `LATTICE_ACROSS_MEAN`); y, z, w unused.
+            env_lattice_across: vec4,
             /// The rough materials' bright split (environment/bright.rs `split_bright_rough`),
             /// which the grid and filtered importance sampling read where the camera looks (and
             /// the lattice, from env_lattice_share.y up): x the
