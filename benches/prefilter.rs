@@ -76,6 +76,7 @@ fn bench(
         small_layer_texel: 1.0,
         fine_layers: 0,
         blur_net_of_read: false,
+        supersample_scale: 1,
     };
     let mut gpu_times = Vec::new();
     let mut cpu_seconds = Vec::new();

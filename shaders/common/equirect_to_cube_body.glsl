@@ -151,6 +151,30 @@ ivec2 source_cell(int face, uint i, uint j, uint n, uint a, uint b, out bool nea
     return ivec2(cell);
 }
 
+// One bit per sub-sample b·S + a, S ≤ MAX_STEP_ONE_SUPERSAMPLE.
+const uint NEAR_WORDS = (MAX_STEP_ONE_SUPERSAMPLE * MAX_STEP_ONE_SUPERSAMPLE + 31u) / 32u;
+
+// The texel's sub-samples in fp32 (b, then a), leaving out those near a pixel boundary, whose
+// bits it sets in `near_bits` (all clear without PRECISE_COORDINATES); true if any was near.
+bool far_sum(int face, uint i, uint j, uint n, out vec3 sum, out uint near_bits[NEAR_WORDS]) {
+    sum = vec3(0.0);
+    for (uint w = 0u; w < NEAR_WORDS; ++w) {
+        near_bits[w] = 0u;
+    }
+    bool any_near = false;
+    for (uint b = 0u; b < SUPERSAMPLE; ++b) {
+        for (uint a = 0u; a < SUPERSAMPLE; ++a) {
+            bool near;
+            ivec2 cell = source_cell(face, i, j, n, a, b, near);
+            uint k = b * SUPERSAMPLE + a;
+            near_bits[k / 32u] |= near ? 1u << (k % 32u) : 0u;
+            any_near = any_near || near;
+            sum += near ? vec3(0.0) : fetch(cell.x, cell.y);
+        }
+    }
+    return any_near;
+}
+
 #ifndef NEAR_PASS
 void main() {
     uvec3 id = gl_GlobalInvocationID;
@@ -159,38 +183,25 @@ void main() {
         return;
     }
     int face = int(id.z);
-    vec3 sum = vec3(0.0);
-    // Sub-samples near a pixel boundary, as bits b·S + a (S² ≤ 16: MAX_EQUIRECT_SUPERSAMPLE = 4);
-    // they are added after the others (a different fp32 summation order, nothing more).
-    uint near_bits = 0u;
-    for (uint b = 0u; b < SUPERSAMPLE; ++b) {
-        for (uint a = 0u; a < SUPERSAMPLE; ++a) {
-            bool near;
-            ivec2 cell = source_cell(face, id.x, id.y, n, a, b, near);
-            near_bits |= near ? 1u << (b * SUPERSAMPLE + a) : 0u;
-            sum += near ? vec3(0.0) : fetch(cell.x, cell.y);
-        }
-    }
+    vec3 sum;
+    uint near_bits[NEAR_WORDS];
+    bool any_near = far_sum(face, id.x, id.y, n, sum, near_bits);
     uint index = cube_index(face, id.x, id.y, n);
-#ifdef PRECISE_COORDINATES
-    if (near_bits == 0u) {
-#endif
+    if (!any_near) {
         cube[index] = vec4(sum * (params.intensity / float(SUPERSAMPLE * SUPERSAMPLE)), 1.0);
-#ifdef PRECISE_COORDINATES
     } else {
-        // The partial sum and the sub-samples still to add (exact in a float: < 2^16), for the
-        // near pass, which appends the rest in the same order and scales as above.
-        cube[index] = vec4(sum, float(near_bits));
+        // Listed for the near pass, which sums the texel again on its own (so that it never
+        // depends on this pass's fp32 agreeing with its own bit for bit).
         uint slot = atomicAdd(near_header.count, 1u);
         near_texels[slot] = index;
         if (slot % NEAR_GROUP_SIZE == 0u) {
             atomicAdd(near_header.dispatch_x, 1u);
         }
     }
-#endif
 }
 #else
-// The near pass: one invocation per listed texel, every lane with work.
+// The near pass: one invocation per listed texel, every lane with work. The sub-samples far from
+// a pixel boundary in fp32 as step 1 sums them, then the near ones in double, in order.
 void main() {
     uint slot = gl_WorkGroupID.x * NEAR_GROUP_SIZE + gl_LocalInvocationIndex;
     if (slot >= near_header.count) {
@@ -201,16 +212,19 @@ void main() {
     int face = int(index / (n * n));
     uint j = (index / n) % n;
     uint i = index % n;
-    vec4 partial = cube[index];
-    vec3 sum = partial.xyz;
-    uint near_bits = uint(partial.w);
-    // At most S² ≤ 16 iterations.
-    while (near_bits != 0u) {
-        uint bit = uint(findLSB(near_bits));
-        near_bits &= ~(1u << bit);
-        ivec2 cell = ivec2(floor(source_position(
-            face, i, j, n, bit % SUPERSAMPLE, bit / SUPERSAMPLE)));
-        sum += fetch(cell.x, cell.y);
+    vec3 sum;
+    uint near_bits[NEAR_WORDS];
+    far_sum(face, i, j, n, sum, near_bits);
+    for (uint w = 0u; w < NEAR_WORDS; ++w) {
+        uint bits = near_bits[w];
+        while (bits != 0u) {
+            uint bit = uint(findLSB(bits));
+            bits &= ~(1u << bit);
+            uint k = w * 32u + bit;
+            ivec2 cell = ivec2(floor(source_position(
+                face, i, j, n, k % SUPERSAMPLE, k / SUPERSAMPLE)));
+            sum += fetch(cell.x, cell.y);
+        }
     }
     cube[index] = vec4(sum * (params.intensity / float(SUPERSAMPLE * SUPERSAMPLE)), 1.0);
 }

@@ -53,6 +53,7 @@ pub fn run(gpu: &GpuContext, config: &BenchConfig) -> Result<PrefilterBench> {
         small_layer_texel: 1.0,
         fine_layers: 0,
         blur_net_of_read: false,
+        supersample_scale: 1,
     };
     params.validate()?;
     let prefilter = GpuPrefilter::new(gpu)?;

@@ -56,6 +56,7 @@ impl CacheKey {
         hash.update(params.layers.to_le_bytes());
         hash.update(params.fine_layers.to_le_bytes());
         hash.update([u8::from(params.blur_net_of_read)]);
+        hash.update(params.supersample(source.width).to_le_bytes());
         for x in [
             params.beta_min,
             params.beta_max,
@@ -319,6 +320,7 @@ mod tests {
             small_layer_texel: 1.0,
             fine_layers: 0,
             blur_net_of_read: false,
+            supersample_scale: 1,
         };
         let source = Equirect::constant(4, 2, [1.0, 0.5, 0.25]);
         let key = CacheKey::new(&source, &params, EnvironmentLight::default());
@@ -378,6 +380,11 @@ mod tests {
             ..params
         };
         assert_ne!(key, CacheKey::new(&source, &net_of_read, light(1.0, 0.0)));
+        let supersampled = PrefilterParams {
+            supersample_scale: 4,
+            ..params
+        };
+        assert_ne!(key, CacheKey::new(&source, &supersampled, light(1.0, 0.0)));
     }
 
     #[test]

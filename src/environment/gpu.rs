@@ -14,8 +14,8 @@
 use super::bright::BrightLight;
 use super::image::{CubeImage, Equirect, PrefilteredEnvironment};
 use super::params::{
-    equirect_supersample, EnvironmentLight, EnvironmentModel, LayerPlan, PrefilterParams,
-    LOBE_CUTOFF, MAX_FACE_SIZE, MIN_LAYER_FACE,
+    EnvironmentLight, EnvironmentModel, LayerPlan, PrefilterParams, LOBE_CUTOFF, MAX_FACE_SIZE,
+    MIN_LAYER_FACE,
 };
 use super::sharp_source::SharpSource;
 use crate::gpu::shaders::interface::{
@@ -561,7 +561,7 @@ impl GpuPrefilter {
             intensity: intensity as f32,
             rotation_cos: rot_cos as f32,
             rotation_sin: rot_sin as f32,
-            supersample: equirect_supersample(source.width, params.face_size),
+            supersample: params.supersample(source.width),
         };
         // Timestamps: start, after step 1, after the mips, after each layer, after irradiance, end.
         let stamps = gpu.create_timestamp_pool(run.buffers.layers.len() as u32 + 5)?;

@@ -47,7 +47,13 @@ pub fn prefilter_cpu(
             "must be a finite angle in degrees",
         ));
     }
-    let base = equirect_to_cube(source, params.face_size, intensity, rotation_deg);
+    let supersample = params.supersample(source.width);
+    let base = equirect_to_cube(
+        source,
+        (params.face_size, supersample),
+        intensity,
+        rotation_deg,
+    );
     let mips = mip_chain(&base, params);
     let mip_of_face = |face_size: u32| {
         mips.iter()
@@ -94,9 +100,9 @@ fn validate_source(source: &Equirect) -> Result<()> {
     Ok(())
 }
 
-/// Step 1: texel (f, i, j) is the mean of S × S sub-samples
-/// (S = [`equirect_supersample`](super::params::equirect_supersample), shared with the GPU's
-/// `shaders/common/equirect_to_cube_body.glsl` through a push constant) at face coordinates
+/// Step 1: texel (f, i, j) is the mean of S × S sub-samples (S =
+/// [`PrefilterParams::supersample`](super::params::PrefilterParams::supersample), shared with the
+/// GPU's `shaders/common/equirect_to_cube_body.glsl` through a push constant) at face coordinates
 /// sc = 2(i + (a + ½)/S)/N − 1, tc = 2(j + (b + ½)/S)/N − 1; each looks along
 /// normalize(face_direction(f, sc, tc)), turned into the environment's frame, and reads the source
 /// pixel that contains its (u, v): column ⌊u·W⌋ wrapping around, row ⌊v·H⌋ clamped at the poles.
@@ -104,13 +110,12 @@ fn validate_source(source: &Equirect) -> Result<()> {
 /// averaged rather than point-sampled. GPU twin: `GpuPrefilter::equirect_to_cube`.
 pub fn equirect_to_cube(
     source: &Equirect,
-    face_size: u32,
+    (face_size, s): (u32, u32),
     intensity: f64,
     rotation_deg: f64,
 ) -> CubeImage {
     let mut cube = CubeImage::new(face_size);
     let m = face_size as usize;
-    let s = super::params::equirect_supersample(source.width, face_size);
     let coordinate = |texel: u32, sub: u32| {
         2.0 * (f64::from(texel) + (f64::from(sub) + 0.5) / f64::from(s)) / f64::from(face_size)
             - 1.0
@@ -397,6 +402,7 @@ mod tests {
             small_layer_texel: 1.0,
             fine_layers: 0,
             blur_net_of_read: false,
+            supersample_scale: 1,
         };
         let env = prefilter_cpu(
             &Equirect::constant(64, 32, c),
@@ -442,7 +448,7 @@ mod tests {
             height: 4,
             pixels: (0..32).map(|p| [(10 * (p / 8) + 1) as f32; 3]).collect(),
         };
-        let up = equirect_to_cube(&by_row, 1, 2.0, 0.0).get(2, 0, 0);
+        let up = equirect_to_cube(&by_row, (1, 4), 2.0, 0.0).get(2, 0, 0);
         assert!((up[0] - 2.0 * 3.5).abs() < 1e-6, "{up:?}");
         // +Z: u = ½ + atan2(x, −1)/2π is in (0.88, 0.97) for x = sc > 0 (column 7) and in
         // (0.03, 0.11) for x < 0 (column 0, across the wrap). With L = column: (8·7 + 8·0)/16.
@@ -451,16 +457,16 @@ mod tests {
             height: 4,
             pixels: (0..32).map(|p| [(p % 8) as f32; 3]).collect(),
         };
-        let plus_z = equirect_to_cube(&by_column, 1, 1.0, 0.0).get(4, 0, 0);
+        let plus_z = equirect_to_cube(&by_column, (1, 4), 1.0, 0.0).get(4, 0, 0);
         assert!((plus_z[0] - 3.5).abs() < 1e-6, "{plus_z:?}");
         // Turning the environment by 90° about +Y shows world +X what +Z showed unturned:
         // world_to_environment maps (1, −tc, −sc) to (sc, −tc, 1), the +Z face's samples.
-        let turned = equirect_to_cube(&by_column, 1, 1.0, 90.0).get(0, 0, 0);
+        let turned = equirect_to_cube(&by_column, (1, 4), 1.0, 90.0).get(0, 0, 0);
         assert!((turned[0] - 3.5).abs() < 1e-6, "{turned:?}");
         // −Z, the image centre: u = ½ − atan(sc)/2π, columns 3 (sc > 0) and 4 → 3.5 as well;
         // +X: u = ½ + atan2(1, sc)/2π, columns 5 (sc > 0) and 6 → 5.5.
-        let minus_z = equirect_to_cube(&by_column, 1, 1.0, 0.0).get(5, 0, 0);
-        let plus_x = equirect_to_cube(&by_column, 1, 1.0, 0.0).get(0, 0, 0);
+        let minus_z = equirect_to_cube(&by_column, (1, 4), 1.0, 0.0).get(5, 0, 0);
+        let plus_x = equirect_to_cube(&by_column, (1, 4), 1.0, 0.0).get(0, 0, 0);
         assert!((minus_z[0] - 3.5).abs() < 1e-6 && (plus_x[0] - 5.5).abs() < 1e-6);
     }
 
@@ -642,6 +648,7 @@ mod tests {
             small_layer_texel: 1.0,
             fine_layers: 0,
             blur_net_of_read: false,
+            supersample_scale: 1,
         };
         assert!(prefilter_cpu(&src, &good, EnvironmentLight::new(f64::NAN, 0.0)).is_err());
         assert!(prefilter_cpu(&src, &good, EnvironmentLight::new(-1.0, 0.0)).is_err());

@@ -3,6 +3,7 @@
 //! prefilter (`gpu.rs`) and the CPU oracle (`oracle.rs`) both run exactly this plan.
 
 use crate::error::show_number;
+use crate::gpu::shaders::interface::MAX_STEP_ONE_SUPERSAMPLE;
 use crate::model::limits;
 use crate::{Error, Result};
 
@@ -18,18 +19,36 @@ pub const MIN_LAYER_FACE: u32 = 16;
 /// Step 1 reads S × S sub-samples per cube texel (the source pixel containing each) and averages
 /// them: a box filter over the texel's footprint, which adds about half the extra blur of a
 /// bilinear point sample (measured against the definition: layer-1 worst error 7.9 % vs 10.7 %).
-/// S is what it takes to put about four sub-samples across one source pixel at the face centre:
-/// a cube texel spans (π/2)/N, a source pixel 2π/W, so S = ⌈W/N⌉, at most
-/// [`MAX_EQUIRECT_SUPERSAMPLE`]. Passed to equirect_to_cube.comp as a push constant.
-pub fn equirect_supersample(source_width: u32, face_size: u32) -> u32 {
-    source_width
-        .div_ceil(face_size.max(1))
-        .clamp(1, MAX_EQUIRECT_SUPERSAMPLE)
+/// S is what it takes to put about `scale`·π sub-samples across one source pixel at the face
+/// centre: a cube texel spans 2/N there, a source pixel 2π/W, so S = `scale`·⌈W/N⌉, at most
+/// `scale`·[`MAX_EQUIRECT_SUPERSAMPLE`] ([`PrefilterParams::supersample_scale`]: 1 for SPEC's
+/// `paper` layers, [`BRDF_SUPERSAMPLE_SCALE`] for `brdf`'s). Passed to equirect_to_cube.comp as a
+/// push constant.
+pub fn equirect_supersample(source_width: u32, face_size: u32, scale: u32) -> u32 {
+    let scale = scale.clamp(1, MAX_SUPERSAMPLE_SCALE);
+    scale
+        * source_width
+            .div_ceil(face_size.max(1))
+            .clamp(1, MAX_EQUIRECT_SUPERSAMPLE)
 }
 
-/// Beyond 4 × 4 sub-samples the box filter is already exact to well below the blur layers'
-/// accuracy; a source far larger than the cube is better downsampled first.
+/// Beyond 4 × 4 sub-samples the box filter is exact to well below the `paper` layers' accuracy;
+/// a source far larger than the cube is better downsampled first.
 pub const MAX_EQUIRECT_SUPERSAMPLE: u32 = 4;
+
+/// The largest [`PrefilterParams::supersample_scale`]: S ≤ `MAX_STEP_ONE_SUPERSAMPLE` (16),
+/// which step 1's near pass is sized for.
+pub const MAX_SUPERSAMPLE_SCALE: u32 = MAX_STEP_ONE_SUPERSAMPLE / MAX_EQUIRECT_SUPERSAMPLE;
+
+/// [`PrefilterParams::supersample_scale`] of the `brdf` model's layers: S = 16 at the usual
+/// W = 4N, about 12.6 sub-samples across a source pixel at the face centre instead of π. A
+/// one-pixel-wide bright line (a lamp stand at the studio's horizon, 25× its surround) covers 3
+/// or 4 of π sub-samples a row, so step 1 counted it 4.5 % short or 27 % over, row by row, and
+/// the layers blurred from it read up to 11–13 % too bright beside it at β of 1.5–3 source
+/// pixels (against the Gaussian of the map's pixels); at S = 16 within 2.4 %. The studio board
+/// seen 80° from its normal at m = 0.05 went from 2.96 / 16.6 % to 2.02 / 11.8 % (mean / p99;
+/// BENCHMARKS.md, "Step 1 counts thin lines").
+pub const BRDF_SUPERSAMPLE_SCALE: u32 = 4;
 
 /// Face size of the irradiance cube, and of the source it integrates: E(N) is a cosine-weighted
 /// integral over a hemisphere, so 32² texels per face resolve it far below 1e-3 (measured in the
@@ -77,6 +96,9 @@ pub struct PrefilterParams {
     /// a bilinear read of it is blurred by β: the `brdf` model's layers
     /// ([`BRDF_BLUR_NET_OF_READ`]); false for SPEC's `paper` layers, convolved by β itself.
     pub blur_net_of_read: bool,
+    /// Step 1's sub-samples per texel, as a multiple of SPEC's rule ([`equirect_supersample`]):
+    /// 1 for SPEC's `paper` layers, [`BRDF_SUPERSAMPLE_SCALE`] for `brdf`'s.
+    pub supersample_scale: u32,
 }
 
 /// [`PrefilterParams::blur_net_of_read`] of the `brdf` model's layers. A layer's texels are box
@@ -142,6 +164,7 @@ impl PrefilterParams {
             small_layer_texel: 1.0,
             fine_layers: 0,
             blur_net_of_read: false,
+            supersample_scale: 1,
         }
     }
 
@@ -162,6 +185,7 @@ impl PrefilterParams {
                 fine_layers: BRDF_FINE_LAYERS,
                 beta_max: BRDF_BETA_MAX,
                 blur_net_of_read: BRDF_BLUR_NET_OF_READ,
+                supersample_scale: BRDF_SUPERSAMPLE_SCALE,
                 ..paper
             },
         }
@@ -204,6 +228,16 @@ impl PrefilterParams {
                 format!(
                     "must be in [0.25, layer_texel = {}] (a small layer's texel as a share of its β)",
                     self.layer_texel
+                ),
+            ));
+        }
+        if !(1..=MAX_SUPERSAMPLE_SCALE).contains(&self.supersample_scale) {
+            return Err(Error::invalid(
+                "supersample_scale",
+                self.supersample_scale,
+                format!(
+                    "must be in 1..={MAX_SUPERSAMPLE_SCALE} (step 1's sub-samples as a multiple \
+                     of SPEC's rule)"
                 ),
             ));
         }
@@ -274,6 +308,11 @@ impl PrefilterParams {
 
     /// The face sizes of the source mip chain: N, N/2, …, down to the smallest any layer or the
     /// irradiance needs.
+    /// Step 1's S for a source `source_width` pixels wide ([`equirect_supersample`]).
+    pub fn supersample(&self, source_width: u32) -> u32 {
+        equirect_supersample(source_width, self.face_size, self.supersample_scale)
+    }
+
     pub fn mip_faces(&self) -> Vec<u32> {
         let smallest = self
             .plan()
@@ -525,6 +564,40 @@ mod tests {
     }
 
     #[test]
+    fn step_one_takes_spec_sub_samples_for_paper_and_four_times_as_many_a_side_for_brdf() {
+        // SPEC's rule: S = ⌈W/N⌉ in 1..=4; the `brdf` layers 4× that a side.
+        let paper = PrefilterParams::for_model(1024, EnvironmentModel::Paper);
+        let brdf = PrefilterParams::for_model(1024, EnvironmentModel::Brdf);
+        assert_eq!((paper.face_size, brdf.face_size), (256, 256));
+        assert_eq!((paper.supersample(1024), brdf.supersample(1024)), (4, 16));
+        assert_eq!(equirect_supersample(300, 256, 1), 2);
+        assert_eq!(equirect_supersample(300, 256, 4), 8);
+        assert_eq!(equirect_supersample(64, 256, 4), 4);
+        assert_eq!(
+            equirect_supersample(1 << 16, 256, 4),
+            MAX_STEP_ONE_SUPERSAMPLE
+        );
+        for (scale, ok) in [(0, false), (1, true), (4, true), (5, false)] {
+            let p = PrefilterParams {
+                supersample_scale: scale,
+                ..brdf
+            };
+            assert_eq!(p.validate().is_ok(), ok, "scale {scale}");
+        }
+        let err = PrefilterParams {
+            supersample_scale: 5,
+            ..brdf
+        }
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("supersample_scale") && err.contains("1..=4"),
+            "{err}"
+        );
+    }
+
+    #[test]
     fn layer_faces_resolve_their_lobe() {
         let p = PrefilterParams {
             face_size: 512,
@@ -535,6 +608,7 @@ mod tests {
             small_layer_texel: 1.0,
             fine_layers: 0,
             blur_net_of_read: false,
+            supersample_scale: 1,
         };
         let faces: Vec<u32> = p.plan().iter().map(|l| l.face_size).collect();
         // π/2/0.02 = 78.5 → 128; β_2 = 0.0384 → 40.9 → 64; … β_5 = 0.27 → 5.8 → 8 → clamped to 16.

@@ -39,6 +39,7 @@ fn small_params(face_size: u32) -> PrefilterParams {
         small_layer_texel: 1.0,
         fine_layers: 0,
         blur_net_of_read: false,
+        supersample_scale: 1,
     }
 }
 
@@ -666,14 +667,14 @@ fn hashed_equirect(width: u32, height: u32) -> Equirect {
 /// x = ±z makes u a multiple of 1/8, a boundary for any W divisible by 8. Which side an exact tie
 /// rounds to is an accident of the last bit (the oracle's libm atan2 against the shader's Newton
 /// step, fused multiply-adds on one driver and not on another), so neither side is wrong; NVIDIA
-/// 580 reads some of them the other way from lavapipe and the CPU.
+/// 580 reads some of them the other way from lavapipe and the CPU. A turned map's sub-samples are
+/// ties as far out as the shader's f32 rotation moves them.
 fn boundary_tie_slack(
     source: &Equirect,
-    face_size: u32,
+    (face_size, s): (u32, u32),
     rotation_deg: f64,
     (face, i, j): (usize, u32, u32),
 ) -> ([f64; 3], u32) {
-    let s = shikki::environment::params::equirect_supersample(source.width, face_size);
     let coordinate = |t: u32, sub: u32| {
         2.0 * (f64::from(t) + (f64::from(sub) + 0.5) / f64::from(s)) / f64::from(face_size) - 1.0
     };
@@ -686,15 +687,23 @@ fn boundary_tie_slack(
     for b in 0..s {
         for a in 0..s {
             let world = face_direction(face, coordinate(i, a), coordinate(j, b)).normalize();
-            let (u, v) = direction_to_equirect(world_to_environment(world, rotation_deg));
+            let e = world_to_environment(world, rotation_deg);
+            let (u, v) = direction_to_equirect(e);
             let (px, py) = (u * w as f64, v * h as f64);
             let (x, y) = (px.floor() as i64, py.floor() as i64);
             let (fx, fy) = (px - x as f64, py - y as f64);
+            // The shader turns the map by the rotation's cos and sin in f32, 6e-8 rad from the
+            // oracle's: W/2π·6e-8/|xz| px in u, H/π·6e-8 px in v (1.5e-6 px of a sub-sample
+            // from a row's edge read the other row at S = 16, ρ = 25°). 0 unturned.
+            let turn = match rotation_deg == 0.0 {
+                true => (0.0, 0.0),
+                false => (1e-8 * w as f64 / e.x.hypot(e.z).max(1e-3), 2e-8 * h as f64),
+            };
             let others = [
-                (fx < 1e-9, (x - 1, y)),
-                (1.0 - fx < 1e-9, (x + 1, y)),
-                (fy < 1e-9, (x, y - 1)),
-                (1.0 - fy < 1e-9, (x, y + 1)),
+                (fx < 1e-9 + turn.0, (x - 1, y)),
+                (1.0 - fx < 1e-9 + turn.0, (x + 1, y)),
+                (fy < 1e-9 + turn.1, (x, y - 1)),
+                (1.0 - fy < 1e-9 + turn.1, (x, y + 1)),
             ]
             .into_iter()
             .filter_map(|(tie, other)| tie.then_some(other));
@@ -714,9 +723,16 @@ fn boundary_tie_slack(
 fn step_one_reads_exactly_the_oracles_source_pixels() {
     let gpu = validated_gpu();
     let prefilter = GpuPrefilter::new(&gpu).unwrap();
-    // S = 4 (16 sub-samples per texel) on both; rotations put pixel boundaries anywhere, and
-    // rotation 0 with W divisible by 8 puts sub-samples exactly on them (boundary_tie_slack).
-    for (width, face, rotation) in [(1024, 128, 25.0), (2048, 128, -131.0), (512, 64, 0.0)] {
+    // S = 4 (16 sub-samples per texel, `paper`'s step 1) and S = 16 (256, the `brdf` model's:
+    // supersample_scale 4) on both; rotations put pixel boundaries anywhere, and rotation 0 with
+    // W divisible by 8 puts sub-samples exactly on them (boundary_tie_slack).
+    for (width, face, rotation, scale) in [
+        (1024, 128, 25.0, 1),
+        (2048, 128, -131.0, 1),
+        (512, 64, 0.0, 1),
+        (1024, 128, 25.0, 4),
+        (512, 64, 0.0, 4),
+    ] {
         let source = hashed_equirect(width, width / 2);
         let params = PrefilterParams {
             face_size: face,
@@ -727,26 +743,30 @@ fn step_one_reads_exactly_the_oracles_source_pixels() {
             small_layer_texel: 1.0,
             fine_layers: 0,
             blur_net_of_read: false,
+            supersample_scale: scale,
         };
+        let s = params.supersample(width);
+        assert_eq!(s, 4 * scale);
         let env = prefilter
             .run(&gpu, &source, &params, EnvironmentLight::new(1.0, rotation))
             .unwrap();
         let got = &env.read_back(&gpu).unwrap().layers[0];
-        let want = oracle::equirect_to_cube(&source, face, 1.0, rotation);
+        let want = oracle::equirect_to_cube(&source, (face, s), 1.0, rotation);
         let (mut worst, mut ties, mut tie_texels_apart) = (0.0_f64, 0, 0);
         for f in 0..6 {
             for j in 0..face {
                 for i in 0..face {
                     let (a, b) = (got.get(f, i, j), want.get(f, i, j));
-                    // The mean of ≤ 16 values in fp32 vs f64: ≤ 16 roundings of 6e-8, so 1e-5 is
-                    // generous; one misread sub-sample among 16 moves a texel by ~(1/16)·(a ~2×
-                    // change) ≫ 1e-5. Only an exact tie may read the other pixel.
-                    let (slack, n) = boundary_tie_slack(&source, face, rotation, (f, i, j));
+                    // The mean of S² values in fp32 vs f64: ≤ S² roundings of 6e-8, so 1e-5 per
+                    // 16 of them is generous; one misread sub-sample among S² moves a texel by
+                    // ~(1/S²)·(a ~2× change), ≥ 4e-3 ≫ 1.6e-4. Only an exact tie may read the
+                    // other pixel.
+                    let (slack, n) = boundary_tie_slack(&source, (face, s), rotation, (f, i, j));
                     ties += n;
                     let mut apart = false;
                     for c in 0..3 {
                         let d = (f64::from(a[c]) - f64::from(b[c])).abs();
-                        let rounding = 1e-5 * f64::from(b[c]).abs();
+                        let rounding = 1e-5 * f64::from(s * s / 16) * f64::from(b[c]).abs();
                         assert!(
                             d <= rounding + slack[c],
                             "{width}: face {f} texel ({i}, {j}) channel {c}: {} vs {} \
@@ -767,7 +787,7 @@ fn step_one_reads_exactly_the_oracles_source_pixels() {
             }
         }
         eprintln!(
-            "{width}×{}, face {face}, ρ {rotation}°: worst {worst:.2e} away from ties; \
+            "{width}×{}, face {face}, S {s}, ρ {rotation}°: worst {worst:.2e} away from ties; \
              {ties} sub-samples on a boundary, {tie_texels_apart} texels read a tie the other way",
             width / 2
         );

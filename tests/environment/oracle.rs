@@ -49,6 +49,7 @@ fn synthetic_params() -> PrefilterParams {
         small_layer_texel: 1.0,
         fine_layers: 0,
         blur_net_of_read: false,
+        supersample_scale: 1,
     }
 }
 

@@ -66,6 +66,9 @@ shader_interface! {
         /// `local_size_x` = `local_size_y` of every prefilter step (one workgroup: an 8 × 8 tile
         /// of one cube face).
         PREFILTER_WORKGROUP: u32 = 8;
+        /// The most sub-samples a side step 1 takes per cube texel (params.rs
+        /// `equirect_supersample`): its near pass keeps one bit per sub-sample, S² ≤ 256.
+        MAX_STEP_ONE_SUPERSAMPLE: u32 = 16;
         /// `local_size_x` of brdf_eval.comp (one invocation per direction triple).
         BRDF_EVAL_WORKGROUP: u32 = 64;
         /// `local_size_x` = `local_size_y` of the denoise's steps (denoise_guide.comp,
