@@ -96,8 +96,9 @@ pub struct PrefilterParams {
     /// a bilinear read of it is blurred by β: the `brdf` model's layers
     /// ([`BRDF_BLUR_NET_OF_READ`]); false for SPEC's `paper` layers, convolved by β itself.
     pub blur_net_of_read: bool,
-    /// Step 1's sub-samples per texel, as a multiple of SPEC's rule ([`equirect_supersample`]):
-    /// 1 for SPEC's `paper` layers, [`BRDF_SUPERSAMPLE_SCALE`] for `brdf`'s.
+    /// Step 1's sub-samples a side per texel, as a multiple of the `paper` rule
+    /// ([`equirect_supersample`]): 1 for SPEC's `paper` layers, [`BRDF_SUPERSAMPLE_SCALE`] for
+    /// `brdf`'s.
     pub supersample_scale: u32,
 }
 
@@ -237,7 +238,7 @@ impl PrefilterParams {
                 self.supersample_scale,
                 format!(
                     "must be in 1..={MAX_SUPERSAMPLE_SCALE} (step 1's sub-samples as a multiple \
-                     of SPEC's rule)"
+                     of the `paper` rule)"
                 ),
             ));
         }
@@ -565,7 +566,7 @@ mod tests {
 
     #[test]
     fn step_one_takes_spec_sub_samples_for_paper_and_four_times_as_many_a_side_for_brdf() {
-        // SPEC's rule: S = ⌈W/N⌉ in 1..=4; the `brdf` layers 4× that a side.
+        // The `paper` rule: S = ⌈W/N⌉ in 1..=4; the `brdf` layers 4× that a side.
         let paper = PrefilterParams::for_model(1024, EnvironmentModel::Paper);
         let brdf = PrefilterParams::for_model(1024, EnvironmentModel::Brdf);
         assert_eq!((paper.face_size, brdf.face_size), (256, 256));

@@ -496,7 +496,7 @@ fn truncated_or_foreign_exr_is_a_clear_error() {
 
 /// A lamp stand one source pixel wide, 25× its surround, drifting a pixel every 8 rows (the
 /// studio's, BENCHMARKS.md "Step 1 counts thin lines"): the `brdf` layers' reads beside it against
-/// the Gaussian of the map's (piecewise-constant) pixels at their own β. Step 1 at SPEC's 4 × 4
+/// the Gaussian of the map's (piecewise-constant) pixels at their own β. Step 1 at `paper`'s 4 × 4
 /// sub-samples a texel (π across a pixel at the face centre) counts the line 3 or 4 times a row;
 /// the `brdf` model's 16 × 16 count it to within a few percent.
 #[test]
