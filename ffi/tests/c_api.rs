@@ -476,13 +476,19 @@ fn require_valgrind() {
 
 /// valgrind with the suppressions of tests/valgrind.supp (only code that is not shikki's, each
 /// explained there). The validation layer is off here: it is checked by the native runs, and
-/// under valgrind it would multiply the run time.
+/// under valgrind it would multiply the run time. Nor does lavapipe optimise its shaders here
+/// (`GALLIVM_PERF=nopt`): on a fresh machine (CI's) Mesa's shader cache is empty and LLVM's
+/// passes over each pipeline, run under valgrind, were most of the time (error_paths 208 s cold,
+/// 101 s without the passes, 41 s from a warm cache); a native run does not warm it for valgrind
+/// (llvmpipe keys the cache by the CPU features valgrind hides). The passes are Mesa's code, not
+/// shikki's: memcheck still sees every call of the library.
 fn valgrind(programs: &Programs, tool_args: &[&str], program: &str) -> Output {
     let suppressions = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/valgrind.supp");
     let mut command = Command::new("valgrind");
     command
         .current_dir(&programs.out)
         .env_remove("SHIKKI_VALIDATION")
+        .env("GALLIVM_PERF", "nopt")
         .args([
             "--error-exitcode=1",
             "--keep-debuginfo=yes",

@@ -40,15 +40,14 @@ pub const MAX_EQUIRECT_SUPERSAMPLE: u32 = 4;
 /// which step 1's near pass is sized for.
 pub const MAX_SUPERSAMPLE_SCALE: u32 = MAX_STEP_ONE_SUPERSAMPLE / MAX_EQUIRECT_SUPERSAMPLE;
 
-/// [`PrefilterParams::supersample_scale`] of the `brdf` model's layers: 1 for now, `paper`'s S.
-/// At 4 (S = 16 at the usual W = 4N, about 12.6 sub-samples across a source pixel at the face
-/// centre instead of π) a line one pixel wide (a lamp stand at the studio's horizon, 25× its
-/// surround), which π sub-samples count 4.5 % short or 27 % over row by row, is counted within a
-/// few percent, and the studio board seen 80° from its normal at m = 0.05 went from 2.96 / 16.6 %
-/// to 2.02 / 11.8 % (mean / p99; BENCHMARKS.md, "Step 1 counts thin lines"). It is not the
-/// default yet: the test suite's many `brdf` prefilters (on lavapipe and in the CPU oracle) took
-/// CI from about 23 to 36 minutes, over its 30.
-pub const BRDF_SUPERSAMPLE_SCALE: u32 = 1;
+/// [`PrefilterParams::supersample_scale`] of the `brdf` model's layers: S = 16 at the usual
+/// W = 4N, about 12.6 sub-samples across a source pixel at the face centre instead of `paper`'s
+/// π. A line one pixel wide (a lamp stand at the studio's horizon, 25× its surround), which π
+/// sub-samples count 4.5 % short or 27 % over row by row, is counted within a few percent, and the
+/// studio board seen 80° from its normal at m = 0.05 went from 2.96 / 16.6 % to 2.02 / 11.8 %
+/// (mean / p99; BENCHMARKS.md, "Step 1 counts thin lines"). Step 1 then costs 1.5 s instead of
+/// 0.08 s a map on lavapipe (2 cores), once per map and light.
+pub const BRDF_SUPERSAMPLE_SCALE: u32 = 4;
 
 /// Face size of the irradiance cube, and of the source it integrates: E(N) is a cosine-weighted
 /// integral over a hemisphere, so 32² texels per face resolve it far below 1e-3 (measured in the
