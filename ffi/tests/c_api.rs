@@ -42,7 +42,8 @@ fn repo_root() -> PathBuf {
 /// target/<profile> (the test binary lives in target/<profile>/deps), with libshikki.so and
 /// libshikki.a freshly built: `cargo test` builds only what tests link (the crate has no rlib),
 /// so the C libraries are built here by a nested `cargo build`, once per test binary. Cargo has
-/// released the target directory's lock by the time tests run.
+/// released the target directory's lock by the time tests run. After `cargo test --workspace`
+/// it only links: ffi/Cargo.toml and the dev profile keep its units the test build's.
 fn library_dir() -> PathBuf {
     static BUILT: OnceLock<PathBuf> = OnceLock::new();
     BUILT
