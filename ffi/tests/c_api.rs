@@ -42,8 +42,9 @@ fn repo_root() -> PathBuf {
 /// target/<profile> (the test binary lives in target/<profile>/deps), with libshikki.so and
 /// libshikki.a freshly built: `cargo test` builds only what tests link (the crate has no rlib),
 /// so the C libraries are built here by a nested `cargo build`, once per test binary. Cargo has
-/// released the target directory's lock by the time tests run. After `cargo test --workspace`
-/// it only links: ffi/Cargo.toml and the dev profile keep its units the test build's.
+/// released the target directory's lock by the time tests run. It only links the C library:
+/// ffi/Cargo.toml and the dev profile keep its other units the test build's, and it fails if it
+/// compiled any of them again (167 s of CI's time, BENCHMARKS.md "CI's time").
 fn library_dir() -> PathBuf {
     static BUILT: OnceLock<PathBuf> = OnceLock::new();
     BUILT
@@ -60,7 +61,16 @@ fn library_dir() -> PathBuf {
             if dir.file_name().is_some_and(|name| name == "release") {
                 build.arg("--release");
             }
-            assert_success("cargo build -p shikki-ffi --lib", &run(&mut build));
+            let output = run(&mut build);
+            assert_success("cargo build -p shikki-ffi --lib", &output);
+            let again = compiled_again(&String::from_utf8_lossy(&output.stderr));
+            assert!(
+                again.is_empty(),
+                "the nested `cargo build -p shikki-ffi --lib` compiled {again:?} again: its \
+                 features or profiles differ from the test build's (compare `cargo test \
+                 --workspace --no-run --unit-graph` with its own `--unit-graph`, BENCHMARKS.md \
+                 \"CI's time\"), or the sources changed since the test build"
+            );
             for lib in ["libshikki.so", "libshikki.a"] {
                 assert!(
                     dir.join(lib).is_file(),
@@ -71,6 +81,28 @@ fn library_dir() -> PathBuf {
             dir
         })
         .clone()
+}
+
+#[test]
+fn the_nested_build_check_names_what_was_compiled_again() {
+    let stderr = "   Compiling serde v1.0.229\n   Compiling shikki v0.1.0 (/r)\n   Compiling \
+                  shikki-ffi v0.1.0 (/r/ffi)\n    Finished `dev` profile in 9.1s\n";
+    assert_eq!(
+        compiled_again(stderr),
+        ["serde v1.0.229", "shikki v0.1.0 (/r)"]
+    );
+    let links = "   Compiling shikki-ffi v0.1.0 (/r/ffi)\n    Finished `dev` profile in 3.5s\n";
+    assert!(compiled_again(links).is_empty());
+}
+
+/// The crates other than the C library itself that a cargo build's stderr says it compiled.
+fn compiled_again(stderr: &str) -> Vec<String> {
+    stderr
+        .lines()
+        .filter_map(|line| line.trim_start().strip_prefix("Compiling "))
+        .filter(|krate| !krate.starts_with("shikki-ffi "))
+        .map(str::to_owned)
+        .collect()
 }
 
 fn run(command: &mut Command) -> Output {
