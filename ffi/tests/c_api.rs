@@ -44,7 +44,7 @@ fn repo_root() -> PathBuf {
 /// so the C libraries are built here by a nested `cargo build`, once per test binary. Cargo has
 /// released the target directory's lock by the time tests run. It only links the C library:
 /// ffi/Cargo.toml and the dev profile keep its other units the test build's, and it fails if it
-/// compiled any of them again (167 s of CI's time, BENCHMARKS.md "CI's time").
+/// compiled any of them again (BENCHMARKS.md "CI's time").
 fn library_dir() -> PathBuf {
     static BUILT: OnceLock<PathBuf> = OnceLock::new();
     BUILT
@@ -511,10 +511,10 @@ fn require_valgrind() {
 /// explained there). The validation layer is off here: it is checked by the native runs, and
 /// under valgrind it would multiply the run time. Nor does lavapipe optimise its shaders here
 /// (`GALLIVM_PERF=nopt`): on a fresh machine (CI's) Mesa's shader cache is empty and LLVM's
-/// passes over each pipeline, run under valgrind, were most of the time (error_paths 208 s cold,
-/// 101 s without the passes, 41 s from a warm cache); a native run does not warm it for valgrind
-/// (llvmpipe keys the cache by the CPU features valgrind hides). The passes are Mesa's code, not
-/// shikki's: memcheck still sees every call of the library.
+/// passes over each pipeline, run under valgrind, were most of the time (BENCHMARKS.md "CI's
+/// time"); a native run does not warm the cache for valgrind (llvmpipe keys it by the CPU
+/// features valgrind hides). The passes are Mesa's code, not shikki's: memcheck still sees every
+/// call of the library.
 fn valgrind(programs: &Programs, tool_args: &[&str], program: &str) -> Output {
     let suppressions = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/valgrind.supp");
     let mut command = Command::new("valgrind");

@@ -40,8 +40,8 @@ fn courtyard() -> &'static Equirect {
 }
 
 /// The courtyard's `brdf` layers at the default light, prefiltered once on the CPU and read by
-/// every test that asks for them: the CPU prefilter is the slowest step of these tests (15–24 s a
-/// map in the debug build CI runs, on 2 cores).
+/// every test that asks for them: the CPU prefilter is the slowest step of these tests in the
+/// debug build CI runs (BENCHMARKS.md "CI's time").
 fn courtyard_layers() -> &'static PrefilteredEnvironment {
     static LAYERS: OnceLock<PrefilteredEnvironment> = OnceLock::new();
     LAYERS.get_or_init(|| {
@@ -174,18 +174,15 @@ fn shader_matches_its_cpu_twin() {
     let prefilter = PrefilterParams::for_model(source.width, EnvironmentModel::Brdf);
     let light = EnvironmentLight::new(1.0, 30.0);
     // As a draw in the `brdf` model reads the map: its residual's layers and its bright lights
-    // (the courtyard has more bright pixels than lights: all MAX_ENV_LIGHTS are used).
-    let split = split_bright(source);
+    // (the courtyard has more bright pixels than lights: all MAX_ENV_LIGHTS are used), and the
+    // rough split's (every bright block a light: 97 on the courtyard, in blocks 8 px wide).
+    let (split, rough) = Split::both(source, light);
     assert_eq!(split.lights.len(), MAX_ENV_LIGHTS);
-    let split = Split::of(&split, &prefilter, light);
-    // The rough split: every bright block a light (97 on the courtyard, in blocks 8 px wide).
-    let rough = split_bright_rough(source);
     assert!(
         rough.lights.len() > MAX_ENV_LIGHTS,
         "{}",
         rough.lights.len()
     );
-    let rough = Split::of(&rough, &prefilter, light);
     let full = prefilter_cpu(source, &prefilter, light).unwrap();
     let on_gpu = GpuEnvironment::upload(&gpu, &full).unwrap();
     let upload = |part: &Split| {
@@ -359,13 +356,14 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 fn error_at_the_render_sample_count() {
     let studio = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/studio.hdr");
     let (studio, disc) = (load_environment(studio).unwrap().image, disc_map());
+    let light = EnvironmentLight::default();
+    let (studio_splits, disc_splits) = (Split::both(&studio, light), Split::both(&disc, light));
     let maps = [
-        ("courtyard", courtyard()),
-        ("studio", &studio),
-        ("disc", &disc),
+        ("courtyard", courtyard(), courtyard_splits()),
+        ("studio", &studio, &studio_splits),
+        ("disc", &disc, &disc_splits),
     ];
     let fresnel = FresnelTable::dielectric(1.5, 0.0045).unwrap();
-    let light = EnvironmentLight::default();
     let pairs = accuracy_pairs();
     // Measured means (green, relative) per map and m = 0.02, 0.05, 0.2, 0.5; see the doc comment.
     let measured = [
@@ -373,15 +371,7 @@ fn error_at_the_render_sample_count() {
         [0.0051, 0.0075, 0.0030, 0.0011],
         [0.0006, 0.0008, 0.0004, 0.0005],
     ];
-    for ((name, source), bounds) in maps.into_iter().zip(measured) {
-        let made;
-        let (split, rough) = match name {
-            "courtyard" => courtyard_splits(),
-            _ => {
-                made = Split::both(source, light);
-                &made
-            }
-        };
+    for ((name, source, (split, rough)), bounds) in maps.into_iter().zip(measured) {
         for (m, bound) in [0.02, 0.05, 0.2, 0.5].into_iter().zip(bounds) {
             let p = params(m);
             let albedo = albedo_knots(&p, &fresnel);
