@@ -411,41 +411,97 @@ float lattice_across_variance(float sigma, float nh) {
     return frame.env_lattice_across.x * sigma * sigma * nh * nh;
 }
 
-// `specular_lattice`'s nodes where it reads the residual's own pixels (by `shape.w`, the node
-// count's share of them, the layers of `pair` the rest): `along` its plane's tangent and step,
-// `shape` its σ_p, reach, β.
-vec3 sharp_lattice(LacquerParams p, vec3 n, vec3 v, float nv, vec4 along, vec4 shape,
-    int half_count, LayerPair pair, int base) {
+// The share of each lattice node's own blur and density at nv: 1 up to
+// frame.env_lattice_across.z, 0 from .w, a smoothstep between (twin: `lattice_own_widths`).
+float lattice_own_widths(float nv) {
+    vec2 band = frame.env_lattice_across.zw;
+    return 1.0 - smoothstep01(clamp((nv - band.x) / (band.y - band.x), 0.0, 1.0));
+}
+
+// A lattice node's own blur: 2(V·H)(N·H)·σ·t, at least frame.env_lattice_across.y of the
+// lattice's β (twin: `lattice_node_blur`).
+float lattice_node_blur(float beta, float sigma, float nh, float vh) {
+    return max(2.0 * vh * nh * sigma * frame.env_lattice_share.x,
+        frame.env_lattice_across.y * beta);
+}
+
+// A lattice node's own density along the plane, relative to the shared Gaussian's peak (twin:
+// `lattice_node_density`, whose doc derives it): `spread` σ, σ_p, β.
+float lattice_node_density(vec3 spread, float slope, vec3 n, vec3 v, vec3 h) {
+    float sigma = spread.x;
+    float t2 = frame.env_lattice_share.x * frame.env_lattice_share.x;
+    float nh = dot(n, h);
+    // Beyond V·H = 0 the lobe's share is negative and the floor is the blur.
+    float own = dot(v, h) > 0.0
+        ? ((1.0 - t2) * nh * nh + t2 * dot(n - v, h) * dot(n + v, h)) / (nh * nh)
+        : 1.0;
+    float floor_share = frame.env_lattice_across.y * spread.z / (2.0 * nh * nh * sigma);
+    float variance = sigma * sigma * min(own, 1.0 - floor_share * floor_share);
+    return variance > 0.0 ? exp(-0.5 * slope * slope / variance) * spread.y / sqrt(variance)
+        : 0.0;
+}
+
+// `specular_lattice`'s nodes where they read their own widths (`kappa` of them, towards
+// grazing) or the residual's own pixels (below layer 1's β, by `shape.w`, the node count's share
+// of them, the layers the rest): `along` its plane's tangent and step, `shape` its σ_p, reach,
+// β; `pair` the layers for β (twin: `specular_lattice`).
+vec3 lattice_by_node(LacquerParams p, vec3 n, vec3 v, float nv, vec4 along, vec4 shape,
+    float kappa, int half_count, LayerPair pair, int base) {
     float sigma_p = shape.x;
     float reach = shape.y;
     float beta = shape.z;
     float sharp_share = shape.w;
     float sigma = p.beckmann_m * 0.70710678;
+    float beta1 = layer_beta(1);
     int first = base == 0 ? frame.env_sharp.x : frame.env_sharp.y;
     // Layer 1 alone, for the widest read's blend with it.
     LayerPair layer1 = LayerPair(frame.layer_face_size[0][1], base + frame.layer_first_texel[0][1],
         frame.layer_face_size[0][1], base + frame.layer_first_texel[0][1], 0.0);
+    // The plain and the slope-weighted sums, and the moments of the tilt λ (twin's comment).
     vec3 sum = vec3(0.0);
     vec3 weights = vec3(0.0);
+    vec3 sum_p = vec3(0.0);
+    vec3 weights_p = vec3(0.0);
+    float first_moment = 0.0;
+    float second_moment = 0.0;
     for (int i = -half_count; i <= half_count; ++i) {
         float slope = float(i) * along.w;
-        float gauss = lattice_node_weight(slope, sigma_p, reach);
         vec3 h = normalize(along.xyz * slope + n);
+        float nh = dot(n, h);
         float vh = dot(v, h);
+        float blur = beta + kappa * (lattice_node_blur(beta, sigma, nh, vh) - beta);
+        float gauss = 1.0;
+        if (sigma_p > 0.0) {
+            float common_weight = exp(-0.5 * (slope / sigma_p) * (slope / sigma_p));
+            float own = lattice_node_density(vec3(sigma, sigma_p, beta), slope, n, v, h);
+            gauss = (common_weight + kappa * (own - common_weight))
+                * lattice_taper(abs(slope) / reach);
+        }
+        first_moment += gauss * slope;
+        second_moment += gauss * slope * slope;
         vec3 s;
         vec3 weight;
         if (gauss > 0.0 && vh > 0.0 && lookup_weight(p, n, v, nv, h, vh, gauss, s, weight)) {
-            s = normalize(across_mean(s, h, vh, lattice_across_variance(sigma, dot(n, h))));
-            vec3 radiance = sharp_radiance(first, s, beta, pair, layer1);
-            if (sharp_share < 1.0) {
-                vec3 layers = layered_radiance_pair(s, pair);
-                radiance = layers + (radiance - layers) * sharp_share;
+            s = normalize(across_mean(s, h, vh, lattice_across_variance(sigma, nh)));
+            LayerPair node_pair = kappa > 0.0 ? layer_pair_texels(blur, base) : pair;
+            vec3 radiance;
+            if (sharp_share > 0.0 && blur < beta1) {
+                radiance = sharp_radiance(first, s, blur, node_pair, layer1);
+                if (sharp_share < 1.0) {
+                    vec3 layers = layered_radiance_pair(s, node_pair);
+                    radiance = layers + (radiance - layers) * sharp_share;
+                }
+            } else {
+                radiance = layered_radiance_pair(s, node_pair);
             }
             sum += weight * radiance;
             weights += weight;
+            sum_p += slope * weight * radiance;
+            weights_p += slope * weight;
         }
     }
-    return normalized_lookups(p, nv, sum, weights);
+    float tilt = kappa > 0.0 && second_moment > 0.0 ? first_moment / second_moment : 0.0;
+    return normalized_lookups(p, nv, sum - tilt * sum_p, weights - tilt * weights_p);
 }
 
 // The narrow-lobe quadrature (twin: `specular_lattice`, whose doc derives it): nodes on the plane
@@ -470,18 +526,22 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
     // At normal incidence σ_p, the reach and the step are 0: the mirror direction alone. Only
     // the nodes inside the reach: one at or beyond it has weight 0.
     int half_count = step > 0.0 ? int(clamp(ceil(reach / step) - 1.0, 0.0, max_half)) : 0;
-    // Every node reads the same blur: its layers, their texels and the blend found once.
+    // Every node but those towards grazing reads the same blur: its layers, their texels and the
+    // blend found once.
     LayerPair pair = layer_pair_texels(beta, base);
-    // Below layer 1's β the residual's own pixels, by the node count's share (twin:
-    // `sharp_share`), in a loop of its own: inline in the layers' loop they cost the default
-    // scene's `brdf` draw, which reads none of them, about 5 % (BENCHMARKS.md).
+    // Towards grazing each node's own blur and density; below layer 1's β the residual's own
+    // pixels, by the node count's share (twin: `sharp_share`). Both in a loop of their own: inline
+    // in the shared pair's loop the sharp reads cost the default scene's `brdf` draw, which reads
+    // none of them, about 5 % (BENCHMARKS.md).
+    float kappa = lattice_own_widths(nv);
+    float narrowest = beta * (1.0 - kappa * (1.0 - frame.env_lattice_across.y));
     vec4 read = frame.env_sharp_read;
-    float sharp_share = frame.env_sharp.z > 0 && beta < layer_beta(1)
+    float sharp_share = frame.env_sharp.z > 0 && narrowest < layer_beta(1)
         ? (step > 0.0 ? clamp((read.w - reach / step) / (read.w - read.z), 0.0, 1.0) : 1.0)
         : 0.0;
-    if (sharp_share > 0.0) {
-        return sharp_lattice(p, n, v, nv, vec4(tangent, step), vec4(sigma_p, reach, beta,
-            sharp_share), half_count, pair, base);
+    if (kappa > 0.0 || sharp_share > 0.0) {
+        return lattice_by_node(p, n, v, nv, vec4(tangent, step), vec4(sigma_p, reach, beta,
+            sharp_share), kappa, half_count, pair, base);
     }
     vec3 sum = vec3(0.0);
     vec3 weights = vec3(0.0);

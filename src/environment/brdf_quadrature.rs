@@ -187,25 +187,30 @@ impl LookupSums {
     fn add_read(
         &mut self,
         fresnel: &FresnelTable,
-        (n, v, nv): (DVec3, DVec3, f64),
+        incidence: (DVec3, DVec3, f64),
         h: DVec3,
         scale: f64,
         read: impl FnOnce(DVec3, f64) -> [f64; 3],
     ) {
-        let cos_h = n.dot(h);
-        let vh = v.dot(h);
-        let s = 2.0 * vh * h - v;
-        let nl = n.dot(s);
-        if !(scale > 0.0 && vh > 0.0 && nl > 0.0) {
-            return;
+        if let Some((weight, radiance)) = lookup(fresnel, incidence, h, scale, read) {
+            self.push(weight, radiance, 1.0);
         }
-        let g = cook_torrance_g(cos_h, nv, nl, vh);
-        let f = fresnel.eval(vh.min(1.0).acos().to_degrees());
-        let weight = scale * g * vh / (nv * cos_h);
-        let radiance = read(s, vh);
+    }
+
+    /// One lookup's weight and radiance, each weight times `factor`.
+    fn push(&mut self, weight: [f64; 3], radiance: [f64; 3], factor: f64) {
         for c in 0..3 {
-            self.sum[c] += f[c] * weight * radiance[c];
-            self.weights[c] += f[c] * weight;
+            self.sum[c] += factor * weight[c] * radiance[c];
+            self.weights[c] += factor * weight[c];
+        }
+    }
+
+    /// The sums with each lookup's weight times (1 − tilt·p), from `moments`, the same lookups
+    /// pushed with factor p.
+    fn tilted(&self, moments: &LookupSums, tilt: f64) -> LookupSums {
+        LookupSums {
+            sum: std::array::from_fn(|c| self.sum[c] - tilt * moments.sum[c]),
+            weights: std::array::from_fn(|c| self.weights[c] - tilt * moments.weights[c]),
         }
     }
 
@@ -217,6 +222,29 @@ impl LookupSums {
             false => 0.0,
         })
     }
+}
+
+/// One lookup: the reflection s of V about the half vector h, its weight per channel
+/// scale·F(acos V·H)·G·(V·H)/(nv·nh) and its radiance `read(s, V·H)`; None where s or h is
+/// below the surface.
+fn lookup(
+    fresnel: &FresnelTable,
+    (n, v, nv): (DVec3, DVec3, f64),
+    h: DVec3,
+    scale: f64,
+    read: impl FnOnce(DVec3, f64) -> [f64; 3],
+) -> Option<([f64; 3], [f64; 3])> {
+    let cos_h = n.dot(h);
+    let vh = v.dot(h);
+    let s = 2.0 * vh * h - v;
+    let nl = n.dot(s);
+    if !(scale > 0.0 && vh > 0.0 && nl > 0.0) {
+        return None;
+    }
+    let g = cook_torrance_g(cos_h, nv, nl, vh);
+    let f = fresnel.eval(vh.min(1.0).acos().to_degrees());
+    let weight = scale * g * vh / (nv * cos_h);
+    Some((f.map(|f| f * weight), read(s, vh)))
 }
 
 /// The plane-of-incidence lattice (`specular_lattice`): the share of the lobe's width across the
@@ -428,10 +456,14 @@ fn smoothstep01(t: f64) -> f64 {
 /// σ_p² = σ² − (β/2)²,
 /// times F·G·(V·H)/(nv·nh) (`lattice_taper` at the reach). Each node reads about the mean of
 /// its reflections across the plane, not its mirror direction ([`across_mean`],
-/// [`LATTICE_ACROSS_MEAN`]). At normal incidence that is one lookup; towards grazing, more (at most 2·`LATTICE_MAX_HALF` + 1, the spacing and blur growing
-/// past that). Below layer 1's β the nodes read the residual's own pixels instead
-/// ([`sharp_radiance`], where `sharp` has them), as far as the lattice's node count allows
-/// ([`sharp_share`]). Normalised by A(nv) like [`specular_quadrature`].
+/// [`LATTICE_ACROSS_MEAN`]). At normal incidence that is one lookup; towards grazing, more (at
+/// most 2·`LATTICE_MAX_HALF` + 1, the spacing and blur growing past that). Towards grazing
+/// ([`lattice_own_widths`]) each node reads the lobe's width across the plane at its own half
+/// vector ([`lattice_node_blur`]) and weighs the in-plane spread its own lookup leaves
+/// ([`lattice_node_density`]), those weights tilted back to mean slope 0. Below layer 1's β the
+/// nodes read the residual's own pixels instead ([`sharp_radiance`], where `sharp` has them), as
+/// far as the lattice's node count allows ([`sharp_share`]). Normalised by A(nv) like
+/// [`specular_quadrature`].
 pub fn specular_lattice(
     (env, sharp): (&PrefilteredEnvironment, Option<&SharpSource>),
     (brdf, fresnel, albedo): (&BrdfParams, &FresnelTable, &[[f32; 4]]),
@@ -461,18 +493,22 @@ pub fn specular_lattice(
         true => ((reach / step).ceil() - 1.0).clamp(0.0, f64::from(LATTICE_MAX_HALF)) as i32,
         false => 0,
     };
-    let sharp = sharp.filter(|_| beta < env.betas.get(1).copied().unwrap_or(0.0));
+    // Towards grazing each node reads its own width and weight ([`lattice_own_widths`]).
+    let kappa = lattice_own_widths(nv);
+    let beta1 = env.betas.get(1).copied().unwrap_or(0.0);
+    let narrowest = beta * (1.0 - kappa * (1.0 - LATTICE_NODE_BLUR_FLOOR));
+    let sharp = sharp.filter(|_| narrowest < beta1);
     let sharp_share = match (sharp, step > 0.0) {
         (Some(_), true) => sharp_share(reach / step),
         (Some(_), false) => 1.0,
         (None, _) => 0.0,
     };
-    let read = |s: DVec3, _| {
-        let layers = || layered_radiance(env, s, beta);
-        match sharp.filter(|_| sharp_share > 0.0) {
+    let read = |s: DVec3, blur: f64| {
+        let layers = || layered_radiance(env, s, blur);
+        match sharp.filter(|_| sharp_share > 0.0 && blur < beta1) {
             None => layers(),
             Some(source) => {
-                let sharp = sharp_radiance(env, source, s, beta);
+                let sharp = sharp_radiance(env, source, s, blur);
                 match sharp_share < 1.0 {
                     true => {
                         let layers = layers();
@@ -483,20 +519,101 @@ pub fn specular_lattice(
             }
         }
     };
-    let mut sums = LookupSums::default();
+    // The own densities lean towards the nodes whose lookups are narrower: each weight g is
+    // tilted by (1 − λ·p), λ = Σg·p / Σg·p², back to mean slope 0. The sums are linear in λ, so
+    // one pass keeps the plain and the slope-weighted sums and λ's two moments.
+    let (mut sums, mut moments) = (LookupSums::default(), LookupSums::default());
+    let (mut first, mut second) = (0.0, 0.0);
     for i in -half..=half {
         let slope = f64::from(i) * step;
+        let h = (tangent * slope + n).normalize();
+        let (nh, vh) = (n.dot(h), v.dot(h));
+        let own = lattice_node_blur(beta, sigma, nh, vh);
+        let blur = beta + kappa * (own - beta);
         let gauss = match sigma_p > 0.0 {
-            true => (-0.5 * (slope / sigma_p).powi(2)).exp() * lattice_taper(slope.abs() / reach),
+            true => {
+                let shared = (-0.5 * (slope / sigma_p).powi(2)).exp();
+                let own = lattice_node_density((sigma, sigma_p, beta), slope, (n, v, h));
+                (shared + kappa * (own - shared)) * lattice_taper(slope.abs() / reach)
+            }
             false => 1.0,
         };
-        let h = (tangent * slope + n).normalize();
-        let across = lattice_across_variance(sigma, n.dot(h));
-        sums.add_read(fresnel, (n, v, nv), h, gauss, |s, vh| {
-            read(across_mean(s, h, vh, across), vh)
-        });
+        first += gauss * slope;
+        second += gauss * slope * slope;
+        let across = lattice_across_variance(sigma, nh);
+        let read = |s, vh| read(across_mean(s, h, vh, across), blur);
+        if let Some((weight, radiance)) = lookup(fresnel, (n, v, nv), h, gauss, read) {
+            sums.push(weight, radiance, 1.0);
+            moments.push(weight, radiance, slope);
+        }
     }
-    sums.normalized(albedo, nv)
+    let tilt = match kappa > 0.0 && second > 0.0 {
+        true => first / second,
+        false => 0.0,
+    };
+    sums.tilted(&moments, tilt).normalized(albedo, nv)
+}
+
+/// The share of each lattice node's own blur and density against the lattice's one, at nv
+/// ([`LATTICE_OWN_WIDTHS`]): 1 up to its first nv, 0 from its second, a smoothstep between
+/// (twin of brdf_environment.glsl's `lattice_own_widths`).
+pub fn lattice_own_widths(nv: f64) -> f64 {
+    let (full, none) = LATTICE_OWN_WIDTHS;
+    1.0 - smoothstep01(((nv - full) / (none - full)).clamp(0.0, 1.0))
+}
+
+/// Where the lattice's nodes read their own widths ([`lattice_own_widths`]): fully up to nv =
+/// 0.35, not from 0.65. Across the plane the lobe is (V·H)(N·H)/nv as wide at a node as at its
+/// centre; towards grazing (at 80° from the normal) about half at the nodes towards the horizon and
+/// twice at the far ones, where one blur for all nodes read the studio board seen 80° from its
+/// normal 2.02 / 11.8 % off at m = 0.05 (mean / p99), each node's own 0.96 / 5.5 %. Nearer face-on
+/// the own widths gained little and lost some (the courtyard board at 45° 0.62 / 3.3 → 0.69 / 3.8
+/// %), and from 0.65 up, 58 % of a sphere's pixels, the nodes share one layer pair, which is what
+/// keeps the draw's cost (BENCHMARKS.md, "Each lattice node at its own width").
+pub const LATTICE_OWN_WIDTHS: (f64, f64) = (0.35, 0.65);
+
+/// The least share of the lattice's β a node's own blur takes ([`lattice_node_blur`]): towards
+/// the horizon V·H falls to 0, and a node read sharper than its neighbours' spacing along the
+/// plane would alias. Above 0.5 it bites at 80° from the normal (m = 0.05: 0.6 read 5.8 % p99,
+/// 0.75 7.4 %, 1 18.5 %; BENCHMARKS.md, "Each lattice node at its own width").
+pub const LATTICE_NODE_BLUR_FLOOR: f64 = 0.5;
+
+/// A lattice node's own blur at half vector h (twin of brdf_environment.glsl's
+/// `lattice_node_blur`): the lobe's width across the plane there times the blur share,
+/// 2(V·H)(N·H)·σ·t (the across Jacobian is 2(V·H)(N·H), 2·nv at the mirror direction), but at
+/// least [`LATTICE_NODE_BLUR_FLOOR`] of the lattice's β.
+pub fn lattice_node_blur(beta: f64, sigma: f64, nh: f64, vh: f64) -> f64 {
+    (2.0 * vh * nh * sigma * LATTICE_BLUR_SHARE).max(LATTICE_NODE_BLUR_FLOOR * beta)
+}
+
+/// A lattice node's own density along the plane at Beckmann slope `slope` (twin of
+/// brdf_environment.glsl's `lattice_node_density`), relative to the shared Gaussian's peak: the
+/// Gaussian of the in-plane spread its lookup leaves, σ² less the square of its own blur's
+/// ([`lattice_node_blur`]) share along the plane, blur/(2(N·H)²) in slope (the reflection's
+/// Jacobian along the plane is 2(N·H)²), normalised by its deviation and scaled by σ_p, so
+/// that it is 1 at the mirror direction when the blur is the lattice's: the nodes whose lookups
+/// are narrower spread wider. For the lobe's own share, 2(V·H)(N·H)·σ·t (where V·H > 0), the
+/// variance is σ²·(1 − t²(V·H)²/(N·H)²), written without cancellation as (N·H)² − t²(V·H)² =
+/// (1 − t²)(N·H)² + t²((N − V)·H)((N + V)·H); for the floor's, σ²·(1 − (fβ/(2(N·H)²σ))²); the
+/// less of the two. 0 where the lookup alone is as wide along the plane as the lobe.
+pub fn lattice_node_density(
+    (sigma, sigma_p, beta): (f64, f64, f64),
+    slope: f64,
+    (n, v, h): (DVec3, DVec3, DVec3),
+) -> f64 {
+    let t2 = LATTICE_BLUR_SHARE * LATTICE_BLUR_SHARE;
+    let nh = n.dot(h);
+    // Beyond V·H = 0 the lobe's share is negative and the floor is the blur.
+    let own = match v.dot(h) > 0.0 {
+        true => ((1.0 - t2) * nh * nh + t2 * (n - v).dot(h) * (n + v).dot(h)) / (nh * nh),
+        false => 1.0,
+    };
+    let floor = 1.0 - (LATTICE_NODE_BLUR_FLOOR * beta / (2.0 * nh * nh * sigma)).powi(2);
+    let variance = sigma * sigma * own.min(floor);
+    match variance > 0.0 {
+        true => (-0.5 * slope * slope / variance).exp() * sigma_p / variance.sqrt(),
+        false => 0.0,
+    }
 }
 
 /// The across-the-plane slope variance whose mean reflection a lattice node at half vector h
@@ -1014,6 +1131,38 @@ mod tests {
                 angle(got, want)
             );
             assert!(angle(s, want) > 2e-4, "θ_V {theta_v}: {}", angle(s, want));
+        }
+    }
+
+    #[test]
+    fn a_lattice_nodes_density_is_its_spread_less_its_own_blur() {
+        // Against the definition written directly: σ² less the square of the node's own blur's
+        // share along the plane, blur/(2(N·H)²), the Gaussian at that variance over its
+        // deviation, times σ_p. The cancellation-free form agrees to rounding (1e-12 relative);
+        // a sign or a factor wrong in it moves the variance by t²(V·H)² or more, 10⁻¹ here.
+        let sigma = 0.05 / std::f64::consts::SQRT_2;
+        let n = DVec3::Z;
+        for theta_v in [0.3_f64, 0.9, 1.3, 1.5] {
+            let v = DVec3::new(theta_v.sin(), 0.0, theta_v.cos());
+            let nv = v.z;
+            let t = LATTICE_BLUR_SHARE;
+            let beta = 2.0 * nv * sigma * t;
+            let sigma_p = sigma * (1.0 - (t * nv).powi(2)).sqrt();
+            for slope in [-0.12, -0.05, 0.0, 0.03, 0.1] {
+                let h = DVec3::new(slope, 0.0, 1.0).normalize();
+                let (nh, vh) = (n.dot(h), v.dot(h));
+                let blur = lattice_node_blur(beta, sigma, nh, vh);
+                let variance = sigma * sigma - (blur / (2.0 * nh * nh)).powi(2);
+                let want = match variance > 0.0 {
+                    true => (-0.5 * slope * slope / variance).exp() * sigma_p / variance.sqrt(),
+                    false => 0.0,
+                };
+                let got = lattice_node_density((sigma, sigma_p, beta), slope, (n, v, h));
+                assert!(
+                    (got - want).abs() <= 1e-12 * want.abs().max(1e-300),
+                    "θ_V {theta_v}, slope {slope}: {got} {want}"
+                );
+            }
         }
     }
 

@@ -286,7 +286,9 @@ shader_interface! {
             /// (`LATTICE_MAX_STEP`).
             env_lattice_share: vec4,
             /// x: the share of the lobe's across-the-plane spread whose mean reflection each
-            /// lattice node reads (brdf_quadrature.rs `LATTICE_ACROSS_MEAN`); y, z, w unused.
+            /// lattice node reads (brdf_quadrature.rs `LATTICE_ACROSS_MEAN`); y: the least share of
+            /// the lattice's β a node's own blur takes (`LATTICE_NODE_BLUR_FLOOR`); z, w: the nv
+            /// band over which the nodes' own widths fade out (`LATTICE_OWN_WIDTHS`).
             env_lattice_across: vec4,
             /// The rough materials' bright split (environment/bright.rs `split_bright_rough`),
             /// which the grid and filtered importance sampling read where the camera looks (and

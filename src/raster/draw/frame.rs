@@ -171,7 +171,12 @@ impl Frame {
         // light bins' (`append_light_bins`).
         self.env_lattice_share[0] = q::LATTICE_BLUR_SHARE as f32;
         self.env_lattice_share[3] = q::LATTICE_MAX_STEP as f32;
-        self.env_lattice_across = [q::LATTICE_ACROSS_MEAN as f32, 0.0, 0.0, 0.0];
+        self.env_lattice_across = [
+            q::LATTICE_ACROSS_MEAN as f32,
+            q::LATTICE_NODE_BLUR_FLOOR as f32,
+            q::LATTICE_OWN_WIDTHS.0 as f32,
+            q::LATTICE_OWN_WIDTHS.1 as f32,
+        ];
         let pack = |grid: &q::GridConstants| {
             [
                 grid.blur_share as f32,
