@@ -1,6 +1,6 @@
 // SPEC §4's `brdf` environment model, specular half: ∫ f_spec(N, V, s)·L(s)·(N·s) dω_s by a fixed
-// quadrature. The CPU twin is src/environment/brdf_quadrature.rs: change both together, formula by
-// formula.
+// quadrature. The CPU twin is src/environment/brdf_quadrature.rs (the lattice's part in
+// brdf_lattice.rs): change both together, formula by formula.
 //
 // Three quadratures of the lookups, picked (or two blended) by the material's m: for a narrow
 // lobe (m ≤ 0.06) a lattice of nodes on the plane of incidence, each read at the blur that gives

@@ -15,6 +15,7 @@
 //! `brdf` environment model's specular integral.
 
 pub mod brdf_definition;
+pub mod brdf_lattice;
 pub mod brdf_quadrature;
 pub mod bright;
 pub mod cube;

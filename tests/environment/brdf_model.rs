@@ -629,7 +629,7 @@ fn the_preparer_attaches_the_split_the_shader_reads() {
 /// m = 0.05).
 #[test]
 fn the_lattice_is_continuous_in_the_view_angle() {
-    use shikki::environment::brdf_quadrature::specular_lattice;
+    use shikki::environment::brdf_lattice::specular_lattice;
     for m in [0.05, 0.02] {
         let worst = largest_step_in_the_view_angle(m, &|env, sharp, material, n, v| {
             specular_lattice((env, Some(sharp)), material, n, v)

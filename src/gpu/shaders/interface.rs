@@ -266,8 +266,9 @@ shader_interface! {
             /// The rough split's, `env_rough_light_*`, alike.
             env_light_direction: [vec4; MAX_ENV_LIGHTS],
             env_light_irradiance: [vec4; MAX_ENV_LIGHTS],
-            /// The `brdf` model's plane-of-incidence lattice (environment/brdf_quadrature.rs
-            /// `LATTICE_*`): spacing, reach, taper, most nodes on each side; the roughness bands
+            /// The `brdf` model's plane-of-incidence lattice (environment/brdf_lattice.rs
+            /// `LATTICE_*`, the taper brdf_quadrature.rs `LATTICE_TAPER`): spacing, reach, taper,
+            /// most nodes on each side; the roughness bands
             /// (m_lo, m_hi) over which it hands over to the grid, and the grid to filtered
             /// importance sampling (`LATTICE_M_*`, `FIS_M_*`); and the deconvolved slope grid
             /// (`GRID`, and `VARIATE_GRID` for `paper`'s control variate): blur share t,
@@ -286,7 +287,7 @@ shader_interface! {
             /// (`LATTICE_MAX_STEP`).
             env_lattice_share: vec4,
             /// x: the share of the lobe's across-the-plane spread whose mean reflection each
-            /// lattice node reads (brdf_quadrature.rs `LATTICE_ACROSS_MEAN`); y: the least share of
+            /// lattice node reads (brdf_lattice.rs `LATTICE_ACROSS_MEAN`); y: the least share of
             /// the lattice's β a node's own blur takes (`LATTICE_NODE_BLUR_FLOOR`); z, w: the nv
             /// band over which the nodes' own widths fade out (`LATTICE_OWN_WIDTHS`).
             env_lattice_across: vec4,

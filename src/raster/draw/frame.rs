@@ -150,16 +150,17 @@ impl Frame {
         self.layer_variance = [read as f32, ratio as f32, 0.0, 0.0];
     }
 
-    /// Packs the `brdf` model's quadrature constants (the lattice's and the grid's and their
-    /// roughness bands, from brdf_quadrature.rs);
+    /// Packs the `brdf` model's quadrature constants (the lattice's, from brdf_lattice.rs, and
+    /// the grid's and their roughness bands, from brdf_quadrature.rs);
     /// also used by the compute evaluator.
     pub(crate) fn set_brdf_quadrature(&mut self) {
+        use crate::environment::brdf_lattice as lattice;
         use crate::environment::brdf_quadrature as q;
         self.env_lattice = [
-            q::LATTICE_SPACING as f32,
-            q::LATTICE_REACH as f32,
+            lattice::LATTICE_SPACING as f32,
+            lattice::LATTICE_REACH as f32,
             q::LATTICE_TAPER as f32,
-            q::LATTICE_MAX_HALF as f32,
+            lattice::LATTICE_MAX_HALF as f32,
         ];
         self.env_lattice_band = [
             q::LATTICE_M_LO as f32,
@@ -169,13 +170,13 @@ impl Frame {
         ];
         // y, the rough split's lattice threshold, is the lights' (`set_brdf_lights`); z the
         // light bins' (`append_light_bins`).
-        self.env_lattice_share[0] = q::LATTICE_BLUR_SHARE as f32;
-        self.env_lattice_share[3] = q::LATTICE_MAX_STEP as f32;
+        self.env_lattice_share[0] = lattice::LATTICE_BLUR_SHARE as f32;
+        self.env_lattice_share[3] = lattice::LATTICE_MAX_STEP as f32;
         self.env_lattice_across = [
-            q::LATTICE_ACROSS_MEAN as f32,
-            q::LATTICE_NODE_BLUR_FLOOR as f32,
-            q::LATTICE_OWN_WIDTHS.0 as f32,
-            q::LATTICE_OWN_WIDTHS.1 as f32,
+            lattice::LATTICE_ACROSS_MEAN as f32,
+            lattice::LATTICE_NODE_BLUR_FLOOR as f32,
+            lattice::LATTICE_OWN_WIDTHS.0 as f32,
+            lattice::LATTICE_OWN_WIDTHS.1 as f32,
         ];
         let pack = |grid: &q::GridConstants| {
             [
