@@ -169,8 +169,7 @@ pub(super) struct LookupSums {
 }
 
 impl LookupSums {
-    /// One lookup: the reflection s of V about the half vector h, read at `beta(V·H)` and weighted
-    /// by scale·F(acos V·H)·G·(V·H)/(nv·nh); nothing where s or h is below the surface.
+    /// One [`lookup`] of the layers at `beta(V·H)`, added to the sums.
     fn add(
         &mut self,
         env: &PrefilteredEnvironment,
@@ -184,7 +183,7 @@ impl LookupSums {
         self.add_read(fresnel, incidence, h, scale, read);
     }
 
-    /// [`add`](Self::add) with the radiance at s from `read(s, V·H)`.
+    /// One [`lookup`] with the radiance at s from `read(s, V·H)`, added to the sums.
     fn add_read(
         &mut self,
         fresnel: &FresnelTable,
