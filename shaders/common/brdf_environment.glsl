@@ -441,6 +441,57 @@ float lattice_node_density(vec3 spread, float slope, vec3 n, vec3 v, vec3 h) {
         : 0.0;
 }
 
+// The four layers from the one `layer_pair_of_run` finds for β on: their read variances (layer
+// 0's texels' own, β_k² from layer 1, LAYER_PAST past the last layer), face sizes and first
+// texels (from `base`). Read once a pixel: the nodes of `lattice_by_node` that read their own
+// widths pick their pair from it with selects (`pair_in_window`), where a per-node
+// `layer_pair_texels` is a gather lane by lane on llvmpipe for each of its four numbers.
+struct LayerWindow {
+    vec4 variance;
+    ivec4 size;
+    ivec4 first;
+    // The least variance the window holds a pair for: 0 from layer 0, its first layer's above.
+    float lowest;
+};
+
+// Beyond every layer's β²: a finite number, as the blend divides by it (t is then ~0, and past
+// the last layer both of a pair's layers are the last).
+const float LAYER_PAST = 3.0e38;
+
+LayerWindow layer_window(float beta, int base) {
+    int k0;
+    float t;
+    layer_pair_of_run(beta, k0, t);
+    LayerWindow w;
+    int last = ENV_LAYER_COUNT - 1;
+    for (int j = 0; j < 4; ++j) {
+        int k = min(k0 + j, last);
+        float b = layer_beta(k);
+        w.variance[j] = k0 + j > last ? LAYER_PAST : (k == 0 ? frame.layer_variance.x : b * b);
+        w.size[j] = frame.layer_face_size[k / 4][k % 4];
+        w.first[j] = base + frame.layer_first_texel[k / 4][k % 4];
+    }
+    // Off the geometric run the blend is `layer_pair`'s, in log β: no window.
+    w.lowest = frame.layer_run.z == 0.0 ? LAYER_PAST : (k0 == 0 ? 0.0 : w.variance.x);
+    return w;
+}
+
+// The pair `layer_pair_texels` finds for `blur`, from the window: the blend in variance, t ≈ 0 on
+// the last layer (the same layer twice); size0 = −1 where blur is outside the window.
+LayerPair pair_in_window(LayerWindow w, float blur) {
+    float x = blur * blur;
+    int j = int(x >= w.variance.y) + int(x >= w.variance.z) + int(x >= w.variance.w);
+    bool a = j == 0;
+    bool b = j == 1;
+    float lo = a ? w.variance.x : (b ? w.variance.y : w.variance.z);
+    float hi = a ? w.variance.y : (b ? w.variance.z : w.variance.w);
+    LayerPair pair = LayerPair(a ? w.size.x : (b ? w.size.y : w.size.z),
+        a ? w.first.x : (b ? w.first.y : w.first.z), a ? w.size.y : (b ? w.size.z : w.size.w),
+        a ? w.first.y : (b ? w.first.z : w.first.w), clamp((x - lo) / (hi - lo), 0.0, 1.0));
+    pair.size0 = x >= w.lowest && j < 3 ? pair.size0 : -1;
+    return pair;
+}
+
 // `specular_lattice`'s nodes where they read their own widths (`kappa` of them, towards
 // grazing) or the residual's own pixels (below layer 1's β, by `shape.w`, the node count's share
 // of them, the layers the rest): `along` its plane's tangent and step, `shape` its σ_p, reach,
@@ -464,6 +515,12 @@ vec3 lattice_by_node(LacquerParams p, vec3 n, vec3 v, float nv, vec4 along, vec4
     vec3 weights_p = vec3(0.0);
     float first_moment = 0.0;
     float second_moment = 0.0;
+    // A node's blur grows with its slope up to tan(θ_V/2) (its (V·H)(N·H) is (nv + slope·sin θ_V)
+    // / (1 + slope²)), beyond the reach at every m the lattice serves: the first node's is the
+    // least, and the window starts at its pair. A node beyond the window finds its own pair.
+    vec3 h_first = normalize(along.xyz * (-float(half_count) * along.w) + n);
+    LayerWindow window = layer_window(beta + kappa * (lattice_node_blur(beta, sigma,
+        dot(n, h_first), dot(v, h_first)) - beta), base);
     for (int i = -half_count; i <= half_count; ++i) {
         float slope = float(i) * along.w;
         vec3 h = normalize(along.xyz * slope + n);
@@ -483,7 +540,10 @@ vec3 lattice_by_node(LacquerParams p, vec3 n, vec3 v, float nv, vec4 along, vec4
         vec3 weight;
         if (gauss > 0.0 && vh > 0.0 && lookup_weight(p, n, v, nv, h, vh, gauss, s, weight)) {
             s = normalize(across_mean(s, h, vh, lattice_across_variance(sigma, nh)));
-            LayerPair node_pair = kappa > 0.0 ? layer_pair_texels(blur, base) : pair;
+            LayerPair node_pair = kappa > 0.0 ? pair_in_window(window, blur) : pair;
+            if (node_pair.size0 < 0) {
+                node_pair = layer_pair_texels(blur, base);
+            }
             vec3 radiance;
             if (sharp_share > 0.0 && blur < beta1) {
                 radiance = sharp_radiance(first, s, blur, node_pair, layer1);
