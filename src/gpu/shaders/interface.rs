@@ -268,11 +268,11 @@ shader_interface! {
             env_light_irradiance: [vec4; MAX_ENV_LIGHTS],
             /// The `brdf` model's plane-of-incidence lattice (environment/brdf_lattice.rs
             /// `LATTICE_*`, the taper brdf_quadrature.rs `LATTICE_TAPER`): spacing, reach, taper,
-            /// most nodes on each side; the roughness bands
-            /// (m_lo, m_hi) over which it hands over to the grid, and the grid to filtered
-            /// importance sampling (`LATTICE_M_*`, `FIS_M_*`); and the deconvolved slope grid
-            /// (`GRID`, and `VARIATE_GRID` for `paper`'s control variate): blur share t,
-            /// spacing, reach, most nodes on each side along the plane.
+            /// most nodes on each side; the roughness bands (m_lo, m_hi) over which it hands over
+            /// to the grid, and the grid to filtered importance sampling (`LATTICE_M_*`,
+            /// `FIS_M_*`); and the deconvolved slope grid (`GRID`, and `VARIATE_GRID` for
+            /// `paper`'s control variate): blur share t, spacing, reach, most nodes on each side
+            /// along the plane.
             env_lattice: vec4,
             env_lattice_band: vec4,
             env_grid: vec4,
