@@ -425,6 +425,11 @@ float lattice_node_blur(float beta, float sigma, float nh, float vh) {
         frame.env_lattice_across.y * beta);
 }
 
+// A lattice node's blur where `kappa` of its own width applies (twin: `specular_lattice`).
+float lattice_blur_at(float beta, float kappa, float sigma, float nh, float vh) {
+    return beta + kappa * (lattice_node_blur(beta, sigma, nh, vh) - beta);
+}
+
 // A lattice node's own density along the plane, relative to the shared Gaussian's peak (twin:
 // `lattice_node_density`, whose doc derives it): `spread` σ, σ_p, β.
 float lattice_node_density(vec3 spread, float slope, vec3 n, vec3 v, vec3 h) {
@@ -519,14 +524,14 @@ vec3 lattice_by_node(LacquerParams p, vec3 n, vec3 v, float nv, vec4 along, vec4
     // / (1 + slope²)), beyond the reach at every m the lattice serves: the first node's is the
     // least, and the window starts at its pair. A node beyond the window finds its own pair.
     vec3 h_first = normalize(along.xyz * (-float(half_count) * along.w) + n);
-    LayerWindow window = layer_window(beta + kappa * (lattice_node_blur(beta, sigma,
-        dot(n, h_first), dot(v, h_first)) - beta), base);
+    LayerWindow window = layer_window(lattice_blur_at(beta, kappa, sigma, dot(n, h_first),
+        dot(v, h_first)), base);
     for (int i = -half_count; i <= half_count; ++i) {
         float slope = float(i) * along.w;
         vec3 h = normalize(along.xyz * slope + n);
         float nh = dot(n, h);
         float vh = dot(v, h);
-        float blur = beta + kappa * (lattice_node_blur(beta, sigma, nh, vh) - beta);
+        float blur = lattice_blur_at(beta, kappa, sigma, nh, vh);
         float gauss = 1.0;
         if (sigma_p > 0.0) {
             float common_weight = exp(-0.5 * (slope / sigma_p) * (slope / sigma_p));
