@@ -373,12 +373,13 @@ vec3 sharp_pixels(int first, vec3 e, float beta) {
 
 // A lattice lookup at β below layer 1's from a residual's own pixels (twin: `sharp_radiance`):
 // their Gaussian at β, or where β is wider than a read there may be, the widest read blended with
-// layer 1 (`layer1`, read alone) in variance; `pair` the layers for β, read at a pole's point.
-vec3 sharp_radiance(int first, vec3 d, float beta, LayerPair pair, LayerPair layer1) {
+// layer 1 (`layer1`, read alone) in variance; `layers` the layers' lookup at d for β, which is the
+// answer at a pole's point.
+vec3 sharp_radiance(int first, vec3 d, float beta, vec3 layers, LayerPair layer1) {
     vec3 e = world_to_environment(d, frame.env_sharp_rotation.x, frame.env_sharp_rotation.y);
     float b = min(beta, sharp_widest_beta(e));
     if (!(b > 0.0)) {
-        return layered_radiance_pair(d, pair);
+        return layers;
     }
     vec3 sharp = sharp_pixels(first, e, b);
     if (beta <= b) {
@@ -549,15 +550,13 @@ vec3 lattice_by_node(LacquerParams p, vec3 n, vec3 v, float nv, vec4 along, vec4
             if (node_pair.size0 < 0) {
                 node_pair = layer_pair_texels(blur, base);
             }
-            vec3 radiance;
+            // The layers' lookup first, on every node: the sharp read's branch then holds only
+            // the sharp read, which this scene's nodes rarely take, not a second copy of the
+            // layers' (18 million instructions of the default scene's draw; BENCHMARKS.md).
+            vec3 radiance = layered_radiance_pair(s, node_pair);
             if (sharp_share > 0.0 && blur < beta1) {
-                radiance = sharp_radiance(first, s, blur, node_pair, layer1);
-                if (sharp_share < 1.0) {
-                    vec3 layers = layered_radiance_pair(s, node_pair);
-                    radiance = layers + (radiance - layers) * sharp_share;
-                }
-            } else {
-                radiance = layered_radiance_pair(s, node_pair);
+                vec3 sharp = sharp_radiance(first, s, blur, radiance, layer1);
+                radiance = sharp_share < 1.0 ? radiance + (sharp - radiance) * sharp_share : sharp;
             }
             sum += weight * radiance;
             weights += weight;
