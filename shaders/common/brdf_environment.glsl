@@ -550,9 +550,10 @@ vec3 lattice_by_node(LacquerParams p, vec3 n, vec3 v, float nv, vec4 along, vec4
             if (node_pair.size0 < 0) {
                 node_pair = layer_pair_texels(blur, base);
             }
-            // The layers' lookup first, on every node: the sharp read's branch then holds only
-            // the sharp read, which this scene's nodes rarely take, not a second copy of the
-            // layers' (18 million instructions of the default scene's draw; BENCHMARKS.md).
+            // The layers' lookup first, on every node: the sharp read's branch, which most
+            // nodes do not take, then holds the sharp read alone, not a second copy of the
+            // layers' lookup that llvmpipe pays for under its lane mask (BENCHMARKS.md, "Where a
+            // gather's cost goes").
             vec3 radiance = layered_radiance_pair(s, node_pair);
             if (sharp_share > 0.0 && blur < beta1) {
                 vec3 sharp = sharp_radiance(first, s, blur, radiance, layer1);
