@@ -78,7 +78,7 @@ vec3 layer_bilinear(int isize, int first, int face, vec2 st) {
     vec2 xy0 = floor(xy);
     vec2 f = xy - xy0;
     // Taps x0 and x0 + 1 in [−1, M]: apron columns and rows 0 and M + 1.
-    ivec2 ij = ivec2(xy0) + 1;
+    ivec2 ij = whole_to_int(xy0 + 1.0);
     int stride = isize + 2;
     int row = first + (face * stride + ij.y) * stride + ij.x;
     uvec4 upper = texelFetch(env_layer_texels, row);
@@ -112,7 +112,7 @@ vec3 layered_radiance_pair(vec3 d, LayerPair pair) {
 vec3 albedo_at(int first, float nv) {
     int last = ALBEDO_KNOTS - 1;
     float x = sqrt(clamp(nv, 0.0, 1.0)) * float(last);
-    int k = min(int(floor(x)), last - 1);
+    int k = min(whole_to_int(floor(x)), last - 1);
     float t = x - float(k);
     vec3 a = texelFetch(fresnel_knots, first + k).yzw;
     vec3 b = texelFetch(fresnel_knots, first + k + 1).yzw;
@@ -207,7 +207,7 @@ int light_bin(vec3 d) {
     int face;
     vec2 st;
     select_face(d, face, st);
-    ivec2 cell = clamp(ivec2(floor((st + 1.0) * (0.5 * float(ENV_LIGHT_BIN_CELLS)))), ivec2(0),
+    ivec2 cell = min(whole_to_int(floor((st + 1.0) * (0.5 * float(ENV_LIGHT_BIN_CELLS)))),
         ivec2(ENV_LIGHT_BIN_CELLS - 1));
     return (face * ENV_LIGHT_BIN_CELLS + cell.y) * ENV_LIGHT_BIN_CELLS + cell.x;
 }
@@ -590,7 +590,9 @@ vec3 specular_lattice(LacquerParams p, vec3 n, vec3 v, float nv, int base) {
     float beta = max(beta0, 2.0 * step / spacing);
     // At normal incidence σ_p, the reach and the step are 0: the mirror direction alone. Only
     // the nodes inside the reach: one at or beyond it has weight 0.
-    int half_count = step > 0.0 ? int(clamp(ceil(reach / step) - 1.0, 0.0, max_half)) : 0;
+    int half_count = step > 0.0
+        ? whole_to_int(clamp(ceil(reach / step) - 1.0, 0.0, max_half))
+        : 0;
     // Every node but those towards grazing reads the same blur: its layers, their texels and the
     // blend found once.
     LayerPair pair = layer_pair_texels(beta, base);

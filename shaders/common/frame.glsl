@@ -5,6 +5,7 @@
 #define FRAME_GLSL
 
 #include "interface.glsl"
+#include "math.glsl"
 
 // K, the bound environment's layer count, set per pipeline: env_layers may be indexed by
 // constants only (lavapipe has no shaderSampledImageArrayDynamicIndexing), and a constant K
@@ -85,7 +86,8 @@ void layer_pair_of_run(float beta, out int k0, out float t) {
         int count = ENV_LAYER_COUNT;
         float x = (log(beta) - run.x) * run.y;
         float whole = floor(x);
-        int k = 1 + int(whole);
+        // Below 0 (x < 0) k0 is 0 whatever k is: `below`.
+        int k = 1 + whole_to_int(whole);
         bool past = k >= count - 1;
         k0 = past ? count - 1 : k;
         // On the run (β_(k+1)/β_k)² − 1 = frame.layer_variance.y and β/β_k = e^((x − whole)/run.y).

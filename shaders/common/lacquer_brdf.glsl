@@ -112,7 +112,7 @@ vec3 fresnel_table(float theta_deg, int first, int count, float step) {
     // to the binary search, so the result is the search's exactly. Why: the search is a divergent
     // loop of dependent buffer reads, run four times per fragment.
     int last = count - 2;
-    int lo = clamp(int(theta / step), 0, last);
+    int lo = min(whole_to_int(floor(theta / step)), last);
     bool found = FRESNEL_POW2_GRID
         || (texelFetch(fresnel_knots, first + lo).x <= theta
             && (lo == last || texelFetch(fresnel_knots, first + lo + 1).x > theta));

@@ -1,10 +1,23 @@
 // Accurate inverse trigonometry (quirk `imprecise_inverse_trig`: GLSL's acos/atan have no useful
-// precision bound in Vulkan): these are exact to about 1e-7 rad everywhere.
+// precision bound in Vulkan): these are exact to about 1e-7 rad everywhere. And whole numbers to
+// int without int()'s conversion lane by lane.
 #ifndef MATH_GLSL
 #define MATH_GLSL
 
 const float PI = 3.14159265358979323846;
 const float HALF_PI = 1.57079632679489661923;
+
+// int(x) for a whole number x in [0, 2^23), without int()'s lane-by-lane conversion (quirk
+// `float_to_int_is_per_lane`): 2^23 + x holds x in its mantissa's low bits, so one vector add and
+// one subtract give the same integer. Below 0 (and NaN) 0, from 2^23 up 2^23 − 1: callers clamp to
+// a smaller range anyway.
+int whole_to_int(float x) {
+    return floatBitsToInt((x >= 0.0 ? min(x, 8388607.0) : 0.0) + 8388608.0) - 0x4B000000;
+}
+
+ivec2 whole_to_int(vec2 x) {
+    return ivec2(whole_to_int(x.x), whole_to_int(x.y));
+}
 
 // acos on [0, 1] (Abramowitz & Stegun 4.4.46): sqrt(1 − x)·Σ a_i x^i, |error| ≤ 2e-8.
 float acos_unit(float x) {

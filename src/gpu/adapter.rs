@@ -80,6 +80,11 @@ pub struct Quirks {
     /// flush, not where it was recorded, so later compute-only timestamps land one pass late. Only
     /// per-pass splits are affected (the wall clock is right): `shikki bench` marks them.
     pub late_timestamps_after_graphics: bool,
+    /// lavapipe (Mesa 25.0, LLVM 15): GLSL `int(x)` of a float is converted lane by lane, six or
+    /// seven instructions a lane (a saturating conversion, scalarised). The hot loops
+    /// of the `brdf` model turn whole numbers into indices with `common/math.glsl`'s
+    /// `whole_to_int` instead, the same integers by a vector add and subtract.
+    pub float_to_int_is_per_lane: bool,
 }
 
 impl Quirks {
@@ -87,12 +92,13 @@ impl Quirks {
     pub const LOOP_ITERATION_LIMIT: u32 = 65535;
 
     /// Every quirk's name, as its field is spelled, in declaration order.
-    pub const NAMES: [&'static str; 5] = [
+    pub const NAMES: [&'static str; 6] = [
         "loop_iteration_limit",
         "imprecise_inverse_trig",
         "ssbo_gather_is_per_lane",
         "loop_body_runs_when_no_lane_enters",
         "late_timestamps_after_graphics",
+        "float_to_int_is_per_lane",
     ];
 
     /// The quirks of a driver: its Vulkan driver ID and `driverInfo` text (Mesa's reads
@@ -108,6 +114,7 @@ impl Quirks {
             // An unreadable version counts as old: a wrong "unreliable" costs less than a wrong
             // split.
             late_timestamps_after_graphics: lavapipe && !matches!(mesa, Some(v) if v >= (25, 0)),
+            float_to_int_is_per_lane: lavapipe,
         }
     }
 
@@ -119,6 +126,7 @@ impl Quirks {
             self.ssbo_gather_is_per_lane,
             self.loop_body_runs_when_no_lane_enters,
             self.late_timestamps_after_graphics,
+            self.float_to_int_is_per_lane,
         ];
         Self::NAMES
             .iter()

@@ -19,8 +19,8 @@
 //!   per quirk with the drivers that have it and why, set once when the adapter is chosen
 //!   (`adapter.rs`) and read from [`AdapterInfo::quirks`]. Code and shaders name the field
 //!   (`loop_iteration_limit`, `imprecise_inverse_trig`, `ssbo_gather_is_per_lane`,
-//!   `loop_body_runs_when_no_lane_enters`, `late_timestamps_after_graphics`); `shikki info`
-//!   lists the active ones.
+//!   `loop_body_runs_when_no_lane_enters`, `late_timestamps_after_graphics`,
+//!   `float_to_int_is_per_lane`); `shikki info` lists the active ones.
 
 mod accel;
 mod adapter;
