@@ -543,7 +543,11 @@ mod tests {
         assert_eq!(old.active(), Quirks::NAMES);
         let new = Quirks::of_driver(vk::DriverId::MESA_LLVMPIPE, MESA_25);
         assert!(!new.late_timestamps_after_graphics);
-        assert_eq!(new.active(), Quirks::NAMES[..4]);
+        let all_but_timestamps: Vec<&str> = Quirks::NAMES
+            .into_iter()
+            .filter(|name| *name != "late_timestamps_after_graphics")
+            .collect();
+        assert_eq!(new.active(), all_but_timestamps);
     }
 
     #[test]
