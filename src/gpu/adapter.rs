@@ -80,10 +80,12 @@ pub struct Quirks {
     /// flush, not where it was recorded, so later compute-only timestamps land one pass late. Only
     /// per-pass splits are affected (the wall clock is right): `shikki bench` marks them.
     pub late_timestamps_after_graphics: bool,
-    /// lavapipe (Mesa 25.0, LLVM 15): GLSL `int(x)` of a float is converted lane by lane, six or
-    /// seven instructions a lane (a saturating conversion, scalarised). The hot loops
-    /// of the `brdf` model turn whole numbers into indices with `common/math.glsl`'s
-    /// `whole_to_int` instead, the same integers by a vector add and subtract.
+    /// lavapipe, every version (seen on Mesa 25.0 with LLVM 15; the others not measured): GLSL
+    /// `int(x)` of a float is converted lane by lane, six or seven instructions a lane (a
+    /// saturating conversion, scalarised). Where it counts (the Fresnel table, the `brdf` model's
+    /// texel taps and per-pixel indices) shaders turn whole numbers into indices with
+    /// `common/math.glsl`'s `whole_to_int` instead: the same integers by a vector add and
+    /// subtract, on every driver.
     pub float_to_int_is_per_lane: bool,
 }
 
