@@ -223,8 +223,8 @@ vec3 binned_rough_bright_specular(LacquerParams p, vec3 n, vec3 v, float nv) {
     int headers = frame.env_rough.z;
     int list = headers + 6 * ENV_LIGHT_BIN_CELLS * ENV_LIGHT_BIN_CELLS;
     vec2 bin = texelFetch(fresnel_knots, headers + light_bin(r)).xy;
-    int first = int(bin.x);
-    int count = int(bin.y);
+    int first = whole_to_int(bin.x);
+    int count = whole_to_int(bin.y);
     vec3 sum = vec3(0.0);
     for (int k = first; k < first + count; ++k) {
         vec3 weight = bright_light_weight(p, n, v, nv, r, texelFetch(fresnel_knots, list + 2 * k));
@@ -337,8 +337,8 @@ vec3 sharp_pixels(int first, vec3 e, float beta) {
     float sigma_y = beta * float(height) / PI;
     float sigma_x = beta * float(width) / (2.0 * PI * length(e.xz));
     float reach = frame.env_sharp_read.y;
-    int top = int(floor(y - reach * sigma_y));
-    int bottom = min(int(floor(y + reach * sigma_y)), top + SHARP_MAX_ROWS - 1);
+    int top = signed_whole_to_int(floor(y - reach * sigma_y));
+    int bottom = min(signed_whole_to_int(floor(y + reach * sigma_y)), top + SHARP_MAX_ROWS - 1);
     // Rows beyond the poles are no pixels: those inside are normalised.
     float row_weight[SHARP_MAX_ROWS];
     for (int j = top; j <= bottom; ++j) {
@@ -346,8 +346,8 @@ vec3 sharp_pixels(int first, vec3 e, float beta) {
             ? normal_cdf((float(j) + 1.0 - y) / sigma_y) - normal_cdf((float(j) - y) / sigma_y)
             : 0.0;
     }
-    int first_pair = int(floor(floor(x - reach * sigma_x) * 0.5));
-    int last_pair = int(floor(floor(x + reach * sigma_x) * 0.5));
+    int first_pair = signed_whole_to_int(floor(floor(x - reach * sigma_x) * 0.5));
+    int last_pair = signed_whole_to_int(floor(floor(x + reach * sigma_x) * 0.5));
     int pairs = width / 2;
     vec3 sum = vec3(0.0);
     float total = 0.0;
@@ -666,8 +666,8 @@ vec3 specular_grid(LacquerParams p, vec3 n, vec3 v, float nv, int base, vec4 gri
     float var_across = sigma * sigma - (0.5 * beta / nv) * (0.5 * beta / nv);
     float step_across = spacing * 0.5 * beta / nv;
     float step_along = max(spacing * 0.5 * beta, reach * sqrt(var_along) / grid.w);
-    int half_along = int(ceil(reach * sqrt(var_along) / step_along));
-    int half_across = int(ceil(reach * sqrt(var_across) / step_across));
+    int half_along = whole_to_int(ceil(reach * sqrt(var_along) / step_along));
+    int half_across = whole_to_int(ceil(reach * sqrt(var_across) / step_across));
     vec3 sum = vec3(0.0);
     vec3 weights = vec3(0.0);
     for (int i = -half_along; i <= half_along; ++i) {

@@ -19,6 +19,13 @@ ivec2 whole_to_int(vec2 x) {
     return ivec2(whole_to_int(x.x), whole_to_int(x.y));
 }
 
+// int(x) for a whole number x in [−2^22, 2^22), the same way: 1.5·2^23 + x holds 2^22 + x in its
+// mantissa's low bits. Beyond the range the nearest end; NaN 0.
+int signed_whole_to_int(float x) {
+    float held = x >= -4194304.0 ? min(x, 4194303.0) : (x < 0.0 ? -4194304.0 : 0.0);
+    return floatBitsToInt(held + 12582912.0) - 0x4B400000;
+}
+
 // acos on [0, 1] (Abramowitz & Stegun 4.4.46): sqrt(1 − x)·Σ a_i x^i, |error| ≤ 2e-8.
 float acos_unit(float x) {
     x = clamp(x, 0.0, 1.0);

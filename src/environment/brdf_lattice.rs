@@ -186,14 +186,16 @@ pub fn lattice_own_widths(nv: f64) -> f64 {
 }
 
 /// Where the lattice's nodes read their own widths ([`lattice_own_widths`]): fully up to nv =
-/// 0.35, not from 0.65. Across the plane the lobe is (V·H)(N·H)/nv as wide at a node as at its
-/// centre; towards grazing (at 80° from the normal) about half at the nodes towards the horizon and
-/// twice at the far ones, where one blur for all nodes read the studio board seen 80° from its
-/// normal 2.02 / 11.8 % off at m = 0.05 (mean / p99), each node's own 0.96 / 5.5 %. Nearer face-on
-/// the own widths gained little and lost some (the courtyard board at 45° 0.62 / 3.3 → 0.69 / 3.8
-/// %), and from 0.65 up, 58 % of a sphere's pixels, the nodes share one layer pair, which is what
-/// keeps the draw's cost (BENCHMARKS.md, "Each lattice node at its own width").
-pub const LATTICE_OWN_WIDTHS: (f64, f64) = (0.35, 0.65);
+/// 0.15, not from 0.35. Across the plane the lobe is (V·H)(N·H)/nv as wide at a node as at its
+/// centre; towards grazing (at 80° from the normal, nv 0.17) about half at the nodes towards the
+/// horizon and twice at the far ones, where one blur for all nodes read the studio board seen 80°
+/// from its normal 2.02 / 11.8 % off at m = 0.05 (mean / p99), each node's own 0.98 / 5.7 %.
+/// Nearer face-on the own widths gained little and lost some (the courtyard board at 45° 0.62 /
+/// 3.3 → 0.69 / 3.8 %), and above the band the nodes share one layer pair, which is what keeps
+/// the draw's cost: 0.35–0.65 read 0.96 / 5.5 % there and 0.54 / 3.6 % on the courtyard's 112
+/// points (now 0.62 / 4.2 %), for a `brdf` draw 3 % dearer, over the bound of 1.5× `paper`
+/// (BENCHMARKS.md, "Each lattice node at its own width" and "The own widths' band narrowed").
+pub const LATTICE_OWN_WIDTHS: (f64, f64) = (0.15, 0.35);
 
 /// The least share of the lattice's β a node's own blur takes ([`lattice_node_blur`]): towards
 /// the horizon V·H falls to 0, and a node read sharper than its neighbours' spacing along the

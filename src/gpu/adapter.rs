@@ -83,9 +83,10 @@ pub struct Quirks {
     /// lavapipe, every version (seen on Mesa 25.0 with LLVM 15; the others not measured): GLSL
     /// `int(x)` of a float is converted lane by lane, six or seven instructions a lane (a
     /// saturating conversion, scalarised). Where it counts (the Fresnel table, the `brdf` model's
-    /// texel taps and per-pixel indices) shaders turn whole numbers into indices with
-    /// `common/math.glsl`'s `whole_to_int` instead: the same integers by a vector add and
-    /// subtract, on every driver.
+    /// texel taps, per-pixel indices, the light bins' lists, the grid's node counts and the sharp
+    /// reads' rows and columns) shaders turn whole numbers into indices with `common/math.glsl`'s
+    /// `whole_to_int` (or `signed_whole_to_int`, which may be negative) instead: the same integers
+    /// by a vector add and subtract, on every driver.
     pub float_to_int_is_per_lane: bool,
 }
 
