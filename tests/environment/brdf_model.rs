@@ -336,8 +336,9 @@ fn accuracy_pairs() -> Vec<(DVec3, DVec3)> {
 ///
 /// History (mean / p99, courtyard then studio): m = 0.02 0.36 / 2.6 and 0.51 / 6.0 %, m = 0.05
 /// 0.69 / 4.2 and 0.75 / 2.6 % before each lattice node read its own width and density towards
-/// grazing (`LATTICE_OWN_WIDTHS`; 0.31 / 1.7, 0.49 / 6.0, 0.54 / 3.6 and 0.54 / 3.0 % with their
-/// band at nv 0.35–0.65, now at 0.15–0.35 0.32 / 1.7, 0.49 / 6.0, 0.62 / 4.2 and 0.57 / 2.5 %);
+/// grazing (`LATTICE_OWN_WIDTHS`; with their band at nv 0.35–0.65 0.31 / 1.7, 0.49 / 6.0,
+/// 0.54 / 3.6 and 0.54 / 3.0 %, with it now at 0.15–0.35 0.32 / 1.7, 0.49 / 6.0, 0.62 / 4.2 and
+/// 0.57 / 2.5 %);
 /// 0.47 / 2.9 and 0.64 / 7.1 % at m = 0.02, 0.71 /
 /// 4.5 and 0.80 / 3.3 % at 0.05 before step 1's 16 × 16 sub-samples (`BRDF_SUPERSAMPLE_SCALE`);
 /// m = 0.02 0.57 / 4.0 and 1.02 / 9.4 % before the
